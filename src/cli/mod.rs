@@ -1,0 +1,63 @@
+//! Subcommands, one module each. Each module has an `Args` struct (clap derive) and a
+//! `run` function; this file only wires them together.
+
+use clap::{Args, Parser, Subcommand};
+
+/// Flags shared by every subcommand.
+#[derive(Debug, Clone, Args)]
+pub struct Global {
+    /// Random seed (overrides the config's seed where a command uses one).
+    #[arg(long, global = true)]
+    pub seed: Option<u64>,
+    /// Print only errors.
+    #[arg(short, long, global = true)]
+    pub quiet: bool,
+    /// More log output (-v info, -vv debug).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    /// Print results as JSON on stdout.
+    #[arg(long, global = true)]
+    pub json: bool,
+}
+
+/// Teach a Shadow hand on a UR10e arm to grasp unseen objects: hand synergies, a Rapier
+/// simulation with tactile and torque sensing, PPO with a GRU policy, evaluation, and
+/// execution on a real robot.
+#[derive(Debug, Parser)]
+#[command(name = "grasp", version, about, long_about = None)]
+pub struct Cli {
+    #[command(flatten)]
+    pub global: Global,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+}
+
+/// Sets up `tracing` output on stderr according to `-q`/`-v`.
+pub fn init_logging(g: &Global) {
+    let level = if g.quiet {
+        "error"
+    } else {
+        match g.verbose {
+            0 => "warn",
+            1 => "info",
+            _ => "debug",
+        }
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_env("GRASP_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .try_init();
+}
+
+/// Runs the chosen subcommand.
+pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    let _global = cli.global;
+    match cli.command {}
+}
