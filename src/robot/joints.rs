@@ -5,6 +5,9 @@
 //! Names here carry no side prefix (`FFJ3`); URDF joint names carry `rh_` or `lh_`.
 //! All lengths are metres, angles radians, efforts N m.
 
+// The limits are the published, rounded values (1.5708, 0.5236, ...), kept as written.
+#![allow(clippy::approx_constant)]
+
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 
 /// Which hand: the paper uses the LEFT hand; the right hand is the published reference.
@@ -53,15 +56,14 @@ pub const WRIST_JOINTS: [&str; 2] = ["WRJ2", "WRJ1"];
 
 /// The 22 finger joints in the synergy order: FF(4), MF(4), RF(4), LF(5), TH(5).
 pub const FINGER_JOINTS: [&str; 22] = [
-    "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4", "RFJ3", "RFJ2",
-    "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
+    "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4", "RFJ3", "RFJ2", "RFJ1",
+    "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
 ];
 
 /// All 24 hand joints in the paper's order: WRJ2, WRJ1, then [`FINGER_JOINTS`].
 pub const HAND_JOINTS: [&str; 24] = [
-    "WRJ2", "WRJ1", "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4",
-    "RFJ3", "RFJ2", "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3",
-    "THJ2", "THJ1",
+    "WRJ2", "WRJ1", "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4", "RFJ3",
+    "RFJ2", "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
 ];
 
 /// The key closing joints of eq. 5 (mask M = 1).
@@ -153,6 +155,7 @@ pub struct JointFact {
     pub effort: f64,
 }
 
+#[allow(clippy::too_many_arguments)]
 const fn rev(
     name: &'static str,
     parent: &'static str,
@@ -281,17 +284,29 @@ pub fn right_hand_facts() -> Vec<JointFact> {
             30.0,
         ),
     ];
-    let mut push_finger = |facts: [JointFact; 5], parent: &'static str| {
+    fn push_finger(v: &mut Vec<JointFact>, facts: [JointFact; 5], parent: &'static str) {
         for mut f in facts {
             if f.parent == "knuckle_parent" {
                 f.parent = parent;
             }
             v.push(f);
         }
-    };
-    push_finger(finger!("FF", "ff", [0.033, 0.0, 0.095], [0.0, -1.0, 0.0]), "palm");
-    push_finger(finger!("MF", "mf", [0.011, 0.0, 0.099], [0.0, -1.0, 0.0]), "palm");
-    push_finger(finger!("RF", "rf", [-0.011, 0.0, 0.095], [0.0, 1.0, 0.0]), "palm");
+    }
+    push_finger(
+        &mut v,
+        finger!("FF", "ff", [0.033, 0.0, 0.095], [0.0, -1.0, 0.0]),
+        "palm",
+    );
+    push_finger(
+        &mut v,
+        finger!("MF", "mf", [0.011, 0.0, 0.099], [0.0, -1.0, 0.0]),
+        "palm",
+    );
+    push_finger(
+        &mut v,
+        finger!("RF", "rf", [-0.011, 0.0, 0.095], [0.0, 1.0, 0.0]),
+        "palm",
+    );
     let lf5 = rev(
         "LFJ5",
         "palm",
@@ -305,6 +320,7 @@ pub fn right_hand_facts() -> Vec<JointFact> {
     );
     v.push(lf5);
     push_finger(
+        &mut v,
         finger!("LF", "lf", [0.0, 0.0, 0.06579], [0.0, 1.0, 0.0]),
         "lfmetacarpal",
     );
