@@ -6,7 +6,9 @@
 //! - [`model`]: loads any URDF (ours or the maker's) into a validated [`Robot`].
 //! - [`kinematics`]: forward kinematics and named postures.
 //! - [`ur10e`]: DH forward and inverse kinematics of the arm.
+//! - [`grasp_map`]: the two-finger-to-hand grasp mapping (Sec. V-B).
 
+pub mod grasp_map;
 pub mod joints;
 pub mod kinematics;
 pub mod model;
