@@ -9,6 +9,7 @@
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 
+pub mod env;
 pub mod objects;
 pub mod robot;
 pub mod synergy;

@@ -1,0 +1,79 @@
+//! Actions of the grasping MDP (Sec. IV-C): `a_t = { d_eps (n), d_theta_w (2), rho }`.
+//!
+//! The policy outputs `n + 2` unbounded Gaussian samples and a Bernoulli `rho`. The env
+//! clips each continuous value to [-1, 1] and scales it:
+//! - synergy increment k: `d_eps_k = clip(a_k) * eps_scale * sqrt(lambda_k)`, i.e. in units
+//!   of the component's standard deviation in the pose dataset (default `eps_scale` 0.25:
+//!   at most a quarter of a standard deviation per control step);
+//! - wrist increments: `d_theta_w = clip(a) * wrist_scale` radians (default 0.05 rad).
+//!
+//! `rho = 1` asks to lift; the continuous part is then ignored (eq. 3 masks it).
+
+use serde::{Deserialize, Serialize};
+
+/// Scales of the continuous action.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ActionConfig {
+    /// Synergy increment per unit action, in standard deviations of the component.
+    pub eps_scale: f64,
+    /// Wrist increment per unit action (rad).
+    pub wrist_scale: f64,
+}
+
+impl Default for ActionConfig {
+    fn default() -> Self {
+        ActionConfig {
+            eps_scale: 0.25,
+            wrist_scale: 0.05,
+        }
+    }
+}
+
+/// A decoded action in physical units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decoded {
+    /// Synergy increments `d_eps` (synergy-space units, i.e. radians along the component).
+    pub d_eps: Vec<f64>,
+    /// Wrist increments (WRJ2, WRJ1), radians.
+    pub d_wrist: [f64; 2],
+    /// Lift decision.
+    pub lift: bool,
+}
+
+/// Clips a raw policy output to [-1, 1] (NaN becomes 0).
+pub fn clip_unit(x: f32) -> f64 {
+    if x.is_nan() {
+        0.0
+    } else {
+        f64::from(x.clamp(-1.0, 1.0))
+    }
+}
+
+/// Decodes the raw continuous outputs `raw` (`n + 2` values) with the component standard
+/// deviations `std` (`n` values, `sqrt(lambda_k)`).
+pub fn decode(cfg: &ActionConfig, std: &[f64], raw: &[f32], lift: bool) -> Decoded {
+    let n = std.len();
+    let get = |k: usize| clip_unit(raw.get(k).copied().unwrap_or(0.0));
+    Decoded {
+        d_eps: (0..n).map(|k| get(k) * cfg.eps_scale * std[k]).collect(),
+        d_wrist: [get(n) * cfg.wrist_scale, get(n + 1) * cfg.wrist_scale],
+        lift,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decode_clips_and_scales_hand_computed() {
+        let cfg = ActionConfig::default();
+        let d = decode(&cfg, &[0.4, 0.2], &[0.5, -3.0, 1.0, f32::NAN], false);
+        // 0.5 * 0.25 * 0.4 = 0.05; clip(-3) = -1 -> -1 * 0.25 * 0.2 = -0.05.
+        assert!((d.d_eps[0] - 0.05).abs() < 1e-12);
+        assert!((d.d_eps[1] + 0.05).abs() < 1e-12);
+        assert_eq!(d.d_wrist, [0.05, 0.0]);
+        assert!(!d.lift);
+    }
+}

@@ -1,0 +1,256 @@
+//! Observations of the grasping MDP (Sec. IV-B).
+//!
+//! One frame is `o_k = < a_{k-1}, phi, tau, theta >`:
+//! - `a_{k-1}`: the previous continuous action (`n` synergy increments and 2 wrist
+//!   increments, in the policy's normalised units, i.e. clipped to [-1, 1]); it is the
+//!   agent's own memory, present in every modality;
+//! - `phi`: the 5 binary fingertip contacts (FF, MF, RF, LF, TH), in M2 and M3;
+//! - `tau`: the 20 actuator torque levels 0..5, in M3, SCALED to [0, 1] as `level / 5`
+//!   (one number per actuator keeps the levels' order and the input small; a one-hot code
+//!   would be 120 numbers per frame);
+//! - `theta`: the 24 joint angles (rad), in every modality.
+//!
+//! The policy sees `O_t = < o_{t-h+1}, ..., o_t >` with `h = 3`, oldest first, zero-padded
+//! at the start of an episode.
+
+use serde::{Deserialize, Serialize};
+
+/// Sensing modalities of the paper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Modality {
+    /// Joint angles only.
+    M1,
+    /// Joint angles and fingertip tactile contacts.
+    M2,
+    /// Joint angles, tactile contacts and joint torque levels.
+    M3,
+}
+
+impl std::str::FromStr for Modality {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_uppercase().as_str() {
+            "M1" => Ok(Modality::M1),
+            "M2" => Ok(Modality::M2),
+            "M3" => Ok(Modality::M3),
+            other => Err(format!("unknown modality '{other}': expected M1, M2 or M3")),
+        }
+    }
+}
+
+/// Number of fingertip tactile sensors.
+pub const N_TACTILE: usize = 5;
+/// Number of actuators reporting a torque level.
+pub const N_TORQUE: usize = 20;
+/// Number of joint angles.
+pub const N_JOINTS: usize = 24;
+/// Number of torque levels.
+pub const N_LEVELS: usize = 6;
+
+/// A named slice of the observation vector, for documentation and debugging.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Segment {
+    /// What the values are.
+    pub name: &'static str,
+    /// Offset inside one frame.
+    pub offset: usize,
+    /// Number of values.
+    pub len: usize,
+}
+
+/// The layout of the stacked observation, so a policy can be built for any modality and
+/// PCA size.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct ObsLayout {
+    /// Sensing modality.
+    pub modality: Modality,
+    /// Number of synergy components `n`.
+    pub n_components: usize,
+    /// History length `h`.
+    pub history: usize,
+    /// The segments of one frame, in order.
+    pub segments: Vec<Segment>,
+}
+
+impl ObsLayout {
+    /// The layout for a modality, PCA size and history length.
+    pub fn new(modality: Modality, n_components: usize, history: usize) -> Self {
+        let mut segments = Vec::new();
+        let mut off = 0;
+        let mut push = |name, len| {
+            segments.push(Segment {
+                name,
+                offset: off,
+                len,
+            });
+            off += len;
+        };
+        push("prev_action", n_components + 2);
+        if modality != Modality::M1 {
+            push("tactile", N_TACTILE);
+        }
+        if modality == Modality::M3 {
+            push("torque_levels", N_TORQUE);
+        }
+        push("joint_angles", N_JOINTS);
+        ObsLayout {
+            modality,
+            n_components,
+            history,
+            segments,
+        }
+    }
+
+    /// Size of one frame.
+    pub fn frame_len(&self) -> usize {
+        self.segments.iter().map(|s| s.len).sum()
+    }
+
+    /// Size of the stacked observation given to the policy.
+    pub fn len(&self) -> usize {
+        self.frame_len() * self.history
+    }
+
+    /// Whether the observation is empty (never, for a valid layout).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Builds one frame from the raw signals.
+    pub fn frame(
+        &self,
+        prev_action: &[f32],
+        tactile: &[bool; N_TACTILE],
+        torque_levels: &[u8; N_TORQUE],
+        joint_angles: &[f64; N_JOINTS],
+    ) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.frame_len());
+        for s in &self.segments {
+            match s.name {
+                "prev_action" => {
+                    out.extend((0..s.len).map(|k| prev_action.get(k).copied().unwrap_or(0.0)))
+                }
+                "tactile" => out.extend(tactile.iter().map(|&t| if t { 1.0 } else { 0.0 })),
+                "torque_levels" => {
+                    out.extend(torque_levels.iter().map(|&l| f32::from(l.min(5)) / 5.0))
+                }
+                "joint_angles" => out.extend(joint_angles.iter().map(|&a| a as f32)),
+                _ => unreachable!("unknown segment"),
+            }
+        }
+        out
+    }
+}
+
+/// The stack of the last `h` frames, oldest first, zero-padded at the episode start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameStack {
+    frame_len: usize,
+    history: usize,
+    frames: std::collections::VecDeque<Vec<f32>>,
+}
+
+impl FrameStack {
+    /// An empty (all-zero) stack.
+    pub fn new(layout: &ObsLayout) -> Self {
+        let mut s = FrameStack {
+            frame_len: layout.frame_len(),
+            history: layout.history,
+            frames: Default::default(),
+        };
+        s.clear();
+        s
+    }
+
+    /// Resets to all zeros (episode start).
+    pub fn clear(&mut self) {
+        self.frames = (0..self.history)
+            .map(|_| vec![0.0; self.frame_len])
+            .collect();
+    }
+
+    /// Pushes the newest frame, dropping the oldest.
+    pub fn push(&mut self, frame: Vec<f32>) {
+        debug_assert_eq!(frame.len(), self.frame_len);
+        self.frames.pop_front();
+        self.frames.push_back(frame);
+    }
+
+    /// The stacked observation `O_t`.
+    pub fn stacked(&self) -> Vec<f32> {
+        self.frames.iter().flatten().copied().collect()
+    }
+}
+
+/// Maps a torque reading to a level 0..5 with ascending thresholds: the level is the
+/// number of thresholds less than or equal to the reading. With the paper's simulation
+/// thresholds {-20, -10, 0, 10, 20}: -25 -> 0, -20 -> 1, -5 -> 2, 0 -> 3, 15 -> 4, 20 -> 5.
+pub fn torque_level(reading: f64, thresholds: &[f64; 5]) -> u8 {
+    thresholds.iter().filter(|&&t| reading >= t).count() as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_per_modality_hand_computed() {
+        // PCA5: prev action 5 + 2 = 7; M1 7 + 24 = 31; M2 + 5 = 36; M3 + 20 = 56.
+        assert_eq!(ObsLayout::new(Modality::M1, 5, 3).frame_len(), 31);
+        assert_eq!(ObsLayout::new(Modality::M2, 5, 3).frame_len(), 36);
+        assert_eq!(ObsLayout::new(Modality::M3, 5, 3).frame_len(), 56);
+        assert_eq!(ObsLayout::new(Modality::M3, 5, 3).len(), 168);
+        assert_eq!(ObsLayout::new(Modality::M3, 10, 3).len(), 3 * 61);
+    }
+
+    #[test]
+    fn frame_content_and_order() {
+        let l = ObsLayout::new(Modality::M3, 3, 3);
+        let mut tact = [false; 5];
+        tact[4] = true;
+        let mut lev = [3u8; 20];
+        lev[0] = 5;
+        let mut ang = [0.0; 24];
+        ang[23] = 1.5;
+        let f = l.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &tact, &lev, &ang);
+        assert_eq!(f.len(), 5 + 5 + 20 + 24);
+        assert_eq!(&f[..5], &[0.5, -1.0, 0.25, 0.0, 1.0]);
+        assert_eq!(&f[5..10], &[0.0, 0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(f[10], 1.0);
+        assert_eq!(f[11], 0.6);
+        assert_eq!(f[53], 1.5);
+        let m1 = ObsLayout::new(Modality::M1, 3, 3);
+        assert_eq!(m1.frame(&[0.0; 5], &tact, &lev, &ang).len(), 29);
+    }
+
+    #[test]
+    fn stack_is_zero_padded_and_oldest_first() {
+        let l = ObsLayout::new(Modality::M1, 3, 3);
+        let mut s = FrameStack::new(&l);
+        assert!(s.stacked().iter().all(|&v| v == 0.0));
+        s.push(vec![1.0; 29]);
+        s.push(vec![2.0; 29]);
+        let o = s.stacked();
+        assert_eq!(o.len(), 87);
+        assert_eq!(o[0], 0.0);
+        assert_eq!(o[29], 1.0);
+        assert_eq!(o[58], 2.0);
+        s.push(vec![3.0; 29]);
+        assert_eq!(s.stacked()[0], 1.0);
+        s.clear();
+        assert!(s.stacked().iter().all(|&v| v == 0.0));
+    }
+
+    #[test]
+    fn torque_levels_hand_computed() {
+        let t = [-20.0, -10.0, 0.0, 10.0, 20.0];
+        assert_eq!(torque_level(-25.0, &t), 0);
+        assert_eq!(torque_level(-20.0, &t), 1);
+        assert_eq!(torque_level(-15.0, &t), 1);
+        assert_eq!(torque_level(-5.0, &t), 2);
+        assert_eq!(torque_level(0.0, &t), 3);
+        assert_eq!(torque_level(15.0, &t), 4);
+        assert_eq!(torque_level(20.0, &t), 5);
+        assert_eq!(torque_level(1e9, &t), 5);
+    }
+}
