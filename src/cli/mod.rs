@@ -3,6 +3,7 @@
 
 use clap::{Args, Parser, Subcommand};
 
+mod pca;
 mod robot;
 
 /// Flags shared by every subcommand.
@@ -38,6 +39,8 @@ pub struct Cli {
 pub enum Command {
     /// Inspect the hand and arm model: joint table, coupling, fingertips, URDF, IK.
     Robot(robot::RobotArgs),
+    /// Hand synergies: fit a PCA model to a pose dataset, draw the synergies.
+    Pca(pca::PcaArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -65,5 +68,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     let global = cli.global;
     match cli.command {
         Command::Robot(a) => robot::run(a, &global),
+        Command::Pca(a) => pca::run(a, &global),
     }
 }

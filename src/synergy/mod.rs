@@ -1,1 +1,59 @@
-//! placeholder module, filled by its issue.
+//! Hand synergies (Sec. III of the paper): pose datasets and their principal components.
+//!
+//! - [`dataset`]: CSV pose datasets of the 22 finger joints, validated against the joint
+//!   limits, with precise errors (file, line, column).
+//! - [`pca`]: [`SynergyModel`], the PCA of a dataset (mean, components, the full
+//!   eigenvalue spectrum), saved as a versioned JSON file.
+//! - [`map`]: the maps P (joints -> synergy coordinates), P^-1 (back) and the target of
+//!   eq. 2, `theta_target = P^-1(d_eps + P(theta_f))`, made feasible by
+//!   [`map::project_feasible`].
+//! - [`draw`]: hand-posture figures of the first synergies (the paper's Fig. 2b).
+//!
+//! All joint vectors are `[f64; 22]` in the synergy order of
+//! [`FINGER_JOINTS`](crate::robot::joints::FINGER_JOINTS), in radians.
+
+pub mod dataset;
+// draw: pending
+pub mod map;
+pub mod pca;
+
+pub use dataset::{Dataset, DatasetError, LoadOptions};
+pub use map::project_feasible;
+pub use pca::{SynergyError, SynergyModel, PAPER_COMPONENTS};
+
+use crate::robot::joints::{hand_facts, FINGER_JOINTS};
+use crate::robot::Side;
+
+/// Number of finger joints in the synergy space.
+pub const N_FINGER_JOINTS: usize = FINGER_JOINTS.len();
+
+/// Lower and upper limits (radians) of the 22 finger joints of `side`, in
+/// [`FINGER_JOINTS`] order, read from [`hand_facts`]. Both hands have the same limits.
+pub fn finger_limits(side: Side) -> [(f64, f64); N_FINGER_JOINTS] {
+    let facts = hand_facts(side);
+    let mut out = [(0.0, 0.0); N_FINGER_JOINTS];
+    for (slot, name) in out.iter_mut().zip(FINGER_JOINTS) {
+        if let Some(f) = facts.iter().find(|f| f.name == name) {
+            *slot = (f.lower, f.upper);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+#[allow(clippy::approx_constant)] // the published joint limits (0.7854, 1.0472, ...)
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finger_limits_follow_the_joint_table() {
+        let l = finger_limits(Side::Left);
+        assert_eq!(l[0], (-0.3491, 0.3491)); // FFJ4
+        assert_eq!(l[1], (-0.2618, 1.5708)); // FFJ3
+        assert_eq!(l[12], (0.0, 0.7854)); // LFJ5
+        assert_eq!(l[17], (-1.0472, 1.0472)); // THJ5
+        assert_eq!(l[21], (-0.2618, 1.5708)); // THJ1
+        assert_eq!(finger_limits(Side::Right), l);
+        assert!(l.iter().all(|(lo, hi)| lo < hi));
+    }
+}
