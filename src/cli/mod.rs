@@ -3,6 +3,7 @@
 
 use clap::{Args, Parser, Subcommand};
 
+mod robot;
 mod pca;
 
 /// Flags shared by every subcommand.
@@ -36,6 +37,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Inspect the hand and arm model: joint table, coupling, fingertips, URDF, IK.
+    Robot(robot::RobotArgs),
     /// Hand synergies: fit a PCA model to a pose dataset, draw the synergies.
     Pca(pca::PcaArgs),
 }
@@ -64,6 +67,7 @@ pub fn init_logging(g: &Global) {
 pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     let global = cli.global;
     match cli.command {
+        Command::Robot(a) => robot::run(a, &global),
         Command::Pca(a) => pca::run(a, &global),
     }
 }

@@ -5,6 +5,9 @@
 //! Names here carry no side prefix (`FFJ3`); URDF joint names carry `rh_` or `lh_`.
 //! All lengths are metres, angles radians, efforts N m.
 
+// The limits are the published, rounded values (1.5708, 0.5236, ...), kept as written.
+#![allow(clippy::approx_constant)]
+
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 
 /// Which hand: the paper uses the LEFT hand; the right hand is the published reference.
@@ -152,6 +155,7 @@ pub struct JointFact {
     pub effort: f64,
 }
 
+#[allow(clippy::too_many_arguments)]
 const fn rev(
     name: &'static str,
     parent: &'static str,
