@@ -3,8 +3,8 @@
 
 use clap::{Args, Parser, Subcommand};
 
-mod robot;
 mod pca;
+mod robot;
 
 /// Flags shared by every subcommand.
 #[derive(Debug, Clone, Args)]
