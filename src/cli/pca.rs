@@ -12,6 +12,10 @@ use super::Global;
 
 /// Hand synergies: PCA of finger postures (Sec. III of the paper).
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  grasp pca fit poses.csv --components 5 --out synergy_model.json
+  grasp pca show synergy_model.json --out postures.svg")]
 pub struct PcaArgs {
     #[command(subcommand)]
     pub command: PcaCommand,
