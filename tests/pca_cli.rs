@@ -231,3 +231,73 @@ fn components_out_of_range_are_refused() {
     assert!(!stderr(&o).contains("panicked"));
     assert!(stderr(&o).contains("23"), "{}", stderr(&o));
 }
+
+#[test]
+fn show_draws_three_rows_and_prints_ranges() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.json");
+    let o = grasp(&[
+        "pca",
+        "fit",
+        fixture().to_str().unwrap(),
+        "-n",
+        "3",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let svg = dir.path().join("fig/postures.svg");
+    let o = grasp(&[
+        "pca",
+        "show",
+        model.to_str().unwrap(),
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"));
+    for k in 1..=3 {
+        assert!(
+            text.contains(&format!("<g id=\"C{k}\">")),
+            "row C{k} missing"
+        );
+    }
+    assert!(!text.contains("<g id=\"C4\">"));
+
+    let o = grasp(&["pca", "show", model.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("FFJ4") && out.contains("THJ1") && out.contains("C3 ("),
+        "{out}"
+    );
+
+    let o = grasp(&["--json", "pca", "show", model.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("JSON");
+    assert_eq!(v["components"].as_array().unwrap().len(), 3);
+    let r = v["components"][0]["joint_ranges"]["FFJ3"]
+        .as_array()
+        .unwrap();
+    assert!(r[0].as_f64().unwrap() <= r[1].as_f64().unwrap());
+}
+
+#[test]
+fn show_rejects_bad_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{\"format_version\": 1,\n \"joints\": [}").unwrap();
+    let o = grasp(&["pca", "show", bad.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("bad.json, line 2"), "{err}");
+    let o = grasp(&[
+        "pca",
+        "show",
+        dir.path().join("none.json").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("none.json"));
+}

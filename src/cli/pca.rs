@@ -2,14 +2,20 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use grasp::robot::Side;
-use grasp::synergy::{finger_limits, Dataset, LoadOptions, SynergyModel};
+use grasp::robot::joints::FINGER_JOINTS;
+use grasp::robot::{Robot, Side};
+use grasp::synergy::{draw, finger_limits, Dataset, LoadOptions, SynergyModel};
+use grasp::util::fsx::write_atomic;
 use std::path::PathBuf;
 
 use super::Global;
 
 /// Hand synergies: PCA of finger postures (Sec. III of the paper).
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  grasp pca fit poses.csv --components 5 --out synergy_model.json
+  grasp pca show synergy_model.json --out postures.svg")]
 pub struct PcaArgs {
     #[command(subcommand)]
     pub command: PcaCommand,
@@ -27,6 +33,18 @@ Examples:
   grasp pca fit poses.csv --components 3 --out pca3.json
   grasp --json pca fit poses.csv > table.json")]
     Fit(FitArgs),
+    /// Show the first three synergies: joint ranges, or hand postures as an SVG figure.
+    #[command(after_help = "\
+Each synergy Ck is shown at -2, -1, 0, +1 and +2 standard deviations (sqrt of its
+eigenvalue) from the mean posture, made feasible (clamped to the joint limits, J1 = J2 in
+the coupled fingers). Without --out the joint ranges are printed; with --out the postures
+are drawn as stick figures (palm-side and side views, like Fig. 2b of the paper).
+
+Examples:
+  grasp pca show synergy_model.json
+  grasp pca show synergy_model.json --out postures.svg
+  grasp --json pca show synergy_model.json")]
+    Show(ShowArgs),
 }
 
 #[derive(Debug, Args)]
@@ -48,10 +66,104 @@ pub struct FitArgs {
     pub tolerance: f64,
 }
 
+#[derive(Debug, Args)]
+pub struct ShowArgs {
+    /// The synergy model (JSON, from `grasp pca fit`).
+    pub model: PathBuf,
+    /// Write the posture figure (SVG) here instead of printing joint ranges.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Which hand draws the postures and limits them.
+    #[arg(long, default_value = "left")]
+    pub hand: Side,
+}
+
 pub fn run(args: PcaArgs, g: &Global) -> Result<()> {
     match args.command {
         PcaCommand::Fit(a) => fit(a, g),
+        PcaCommand::Show(a) => show(a, g),
     }
+}
+
+fn show(a: ShowArgs, g: &Global) -> Result<()> {
+    let model = SynergyModel::load(&a.model)?;
+    let limits = finger_limits(a.hand);
+    let rows = model.n_components().min(draw::FIGURE_COMPONENTS);
+    if let Some(out) = &a.out {
+        let robot = Robot::builtin(a.hand);
+        let svg = draw::synergies_svg(&robot, &model, &limits)
+            .with_context(|| format!("cannot draw the synergies of {}", a.model.display()))?;
+        write_atomic(out, svg.as_bytes())?;
+        if g.json {
+            let v = serde_json::json!({ "model": a.model.display().to_string(),
+                                        "svg": out.display().to_string(), "rows": rows });
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        } else if !g.quiet {
+            println!(
+                "Drew synergies C1-C{rows} of {} at {:?} sigma into {}",
+                a.model.display(),
+                draw::SIGMA_STEPS,
+                out.display()
+            );
+        }
+        return Ok(());
+    }
+    let ranges: Vec<_> = (0..rows)
+        .map(|k| draw::joint_ranges(&model, k, &limits))
+        .collect();
+    if g.json {
+        let comps: Vec<_> = ranges
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let joints: serde_json::Map<String, serde_json::Value> = FINGER_JOINTS
+                    .iter()
+                    .zip(r)
+                    .map(|(j, (lo, hi))| (j.to_string(), serde_json::json!([lo, hi])))
+                    .collect();
+                serde_json::json!({
+                    "component": k + 1,
+                    "eigenvalue": model.eigenvalues()[k],
+                    "sigma": model.eigenvalues()[k].sqrt(),
+                    "explained_variance_ratio": model.explained_variance_ratio()[k],
+                    "joint_ranges": joints,
+                })
+            })
+            .collect();
+        let v = serde_json::json!({
+            "model": a.model.display().to_string(),
+            "sigma_steps": draw::SIGMA_STEPS,
+            "components": comps,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!(
+        "{}: {} components from {} samples; joint ranges (rad) over -2..+2 sigma, feasible",
+        a.model.display(),
+        model.n_components(),
+        model.n_samples()
+    );
+    print!("{:>6}", "joint");
+    for k in 0..rows {
+        print!(
+            "  {:>17}",
+            format!(
+                "C{} ({:.1} %)",
+                k + 1,
+                100.0 * model.explained_variance_ratio()[k]
+            )
+        );
+    }
+    println!();
+    for (j, name) in FINGER_JOINTS.iter().enumerate() {
+        let mut line = format!("{name:>6}");
+        for r in &ranges {
+            line.push_str(&format!("  {:>8.3}..{:<7.3}", r[j].0, r[j].1));
+        }
+        println!("{}", line.trim_end());
+    }
+    Ok(())
 }
 
 fn fit(a: FitArgs, g: &Global) -> Result<()> {

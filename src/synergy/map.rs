@@ -10,25 +10,18 @@
 //! `P^-1(P(theta))` is the orthogonal projection of `theta - mu` onto the synergy span.
 //! The batch versions write into caller-provided buffers and allocate nothing.
 
-use crate::robot::joints::{finger_index, COUPLED_FINGERS};
 use crate::synergy::pca::SynergyModel;
 use crate::synergy::N_FINGER_JOINTS;
 
 const D: usize = N_FINGER_JOINTS;
 
 /// Indices (in [`FINGER_JOINTS`](crate::robot::joints::FINGER_JOINTS)) of the J2 and J1
-/// joints of the coupled fingers FF, MF, RF, LF.
-fn coupled_pairs() -> [(usize, usize); 4] {
-    let mut out = [(0, 0); 4];
-    for (slot, f) in out.iter_mut().zip(COUPLED_FINGERS) {
-        let j2 = finger_index(&format!("{f}J2"));
-        let j1 = finger_index(&format!("{f}J1"));
-        if let (Some(a), Some(b)) = (j2, j1) {
-            *slot = (a, b);
-        }
-    }
-    out
-}
+/// joints of the coupled fingers FF, MF, RF, LF
+/// ([`COUPLED_FINGERS`](crate::robot::joints::COUPLED_FINGERS)); a unit test
+/// derives them from the joint table with
+/// [`finger_index`](crate::robot::joints::finger_index). A constant because eq. 2 runs
+/// at every control step.
+pub const COUPLED_PAIRS: [(usize, usize); 4] = [(2, 3), (6, 7), (10, 11), (15, 16)];
 
 /// Makes a finger posture feasible for the simulated hand, in place:
 /// 1. clamps every joint to its `limits` (lower, upper);
@@ -41,7 +34,7 @@ fn coupled_pairs() -> [(usize, usize); 4] {
 /// Non-finite entries are not expected (the caller's inputs are finite); a NaN stays NaN.
 pub fn project_feasible(theta: &mut [f64; D], limits: &[(f64, f64); D]) {
     clamp(theta, limits);
-    for (j2, j1) in coupled_pairs() {
+    for (j2, j1) in COUPLED_PAIRS {
         let avg = 0.5 * (theta[j2] + theta[j1]);
         theta[j2] = avg;
         theta[j1] = avg;
@@ -184,6 +177,7 @@ impl SynergyModel {
 #[allow(clippy::approx_constant)] // the published joint limits (0.7854, 1.0472, ...)
 mod tests {
     use super::*;
+    use crate::robot::joints::{finger_index, COUPLED_FINGERS};
     use crate::robot::Side;
     use crate::synergy::finger_limits;
     use crate::synergy::pca::tests::{base_posture, directions, known_rows};
@@ -305,7 +299,7 @@ mod tests {
         for (j, (&v, &(lo, hi))) in t.iter().zip(&limits).enumerate() {
             assert!(v >= lo && v <= hi, "joint {j}: {v}");
         }
-        for (j2, j1) in coupled_pairs() {
+        for (j2, j1) in COUPLED_PAIRS {
             assert_eq!(t[j2], t[j1]);
         }
     }
@@ -335,6 +329,9 @@ mod tests {
 
     #[test]
     fn coupled_pairs_are_j2_j1_of_ff_mf_rf_lf() {
-        assert_eq!(coupled_pairs(), [(2, 3), (6, 7), (10, 11), (15, 16)]);
+        for ((j2, j1), f) in COUPLED_PAIRS.iter().zip(COUPLED_FINGERS) {
+            assert_eq!(Some(*j2), finger_index(&format!("{f}J2")));
+            assert_eq!(Some(*j1), finger_index(&format!("{f}J1")));
+        }
     }
 }

@@ -10,10 +10,10 @@
 //! - [`draw`]: hand-posture figures of the first synergies (the paper's Fig. 2b).
 //!
 //! All joint vectors are `[f64; 22]` in the synergy order of
-//! [`FINGER_JOINTS`](crate::robot::joints::FINGER_JOINTS), in radians.
+//! [`FINGER_JOINTS`], in radians.
 
 pub mod dataset;
-// draw: pending
+pub mod draw;
 pub mod map;
 pub mod pca;
 
