@@ -33,8 +33,7 @@ pub struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
-pub enum Command {
-}
+pub enum Command {}
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
 pub fn init_logging(g: &Global) {

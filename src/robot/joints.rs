@@ -53,15 +53,14 @@ pub const WRIST_JOINTS: [&str; 2] = ["WRJ2", "WRJ1"];
 
 /// The 22 finger joints in the synergy order: FF(4), MF(4), RF(4), LF(5), TH(5).
 pub const FINGER_JOINTS: [&str; 22] = [
-    "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4", "RFJ3", "RFJ2",
-    "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
+    "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4", "RFJ3", "RFJ2", "RFJ1",
+    "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
 ];
 
 /// All 24 hand joints in the paper's order: WRJ2, WRJ1, then [`FINGER_JOINTS`].
 pub const HAND_JOINTS: [&str; 24] = [
-    "WRJ2", "WRJ1", "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4",
-    "RFJ3", "RFJ2", "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3",
-    "THJ2", "THJ1",
+    "WRJ2", "WRJ1", "FFJ4", "FFJ3", "FFJ2", "FFJ1", "MFJ4", "MFJ3", "MFJ2", "MFJ1", "RFJ4", "RFJ3",
+    "RFJ2", "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
 ];
 
 /// The key closing joints of eq. 5 (mask M = 1).
@@ -281,7 +280,7 @@ pub fn right_hand_facts() -> Vec<JointFact> {
             30.0,
         ),
     ];
-    let mut push_finger = |facts: [JointFact; 5], parent: &'static str| {
+    let push_finger = |v: &mut Vec<JointFact>, facts: [JointFact; 5], parent: &'static str| {
         for mut f in facts {
             if f.parent == "knuckle_parent" {
                 f.parent = parent;
@@ -289,9 +288,21 @@ pub fn right_hand_facts() -> Vec<JointFact> {
             v.push(f);
         }
     };
-    push_finger(finger!("FF", "ff", [0.033, 0.0, 0.095], [0.0, -1.0, 0.0]), "palm");
-    push_finger(finger!("MF", "mf", [0.011, 0.0, 0.099], [0.0, -1.0, 0.0]), "palm");
-    push_finger(finger!("RF", "rf", [-0.011, 0.0, 0.095], [0.0, 1.0, 0.0]), "palm");
+    push_finger(
+        &mut v,
+        finger!("FF", "ff", [0.033, 0.0, 0.095], [0.0, -1.0, 0.0]),
+        "palm",
+    );
+    push_finger(
+        &mut v,
+        finger!("MF", "mf", [0.011, 0.0, 0.099], [0.0, -1.0, 0.0]),
+        "palm",
+    );
+    push_finger(
+        &mut v,
+        finger!("RF", "rf", [-0.011, 0.0, 0.095], [0.0, 1.0, 0.0]),
+        "palm",
+    );
     let lf5 = rev(
         "LFJ5",
         "palm",
@@ -305,6 +316,7 @@ pub fn right_hand_facts() -> Vec<JointFact> {
     );
     v.push(lf5);
     push_finger(
+        &mut v,
         finger!("LF", "lf", [0.0, 0.0, 0.06579], [0.0, 1.0, 0.0]),
         "lfmetacarpal",
     );

@@ -35,10 +35,7 @@ pub enum ConfigError {
 /// Parses TOML text `src` (read from `path`, used in error messages) into `T`.
 pub fn parse_toml<T: DeserializeOwned>(path: &Path, src: &str) -> Result<T, ConfigError> {
     toml::from_str(src).map_err(|e| {
-        let (line, column) = e
-            .span()
-            .map(|s| line_col(src, s.start))
-            .unwrap_or((1, 1));
+        let (line, column) = e.span().map(|s| line_col(src, s.start)).unwrap_or((1, 1));
         ConfigError::Parse {
             path: path.to_path_buf(),
             line,
