@@ -138,7 +138,7 @@ impl Trainer {
             policy,
             opt,
         };
-        t.restart_envs()?;
+        t.restart_envs(true)?;
         Ok(t)
     }
 
@@ -152,13 +152,14 @@ impl Trainer {
     }
 
     /// Resets every environment with episode seeds derived from the seed and the current
-    /// update index, clears the recurrent state and the reward accumulators.
-    fn restart_envs(&mut self) -> Result<(), PpoError> {
+    /// update index, clears the recurrent state and the reward accumulators. The first
+    /// observations enter the normaliser's statistics when `update_stats`.
+    fn restart_envs(&mut self, update_stats: bool) -> Result<(), PpoError> {
         let base =
             crate::env::api::episode_seed(derive_seed(self.cfg.seed, SEED_ENV), 0, self.update);
         let raw = self.envs.reset(base)?;
         self.envs.drain_finished();
-        self.next_obs = self.observe(&raw, true);
+        self.next_obs = self.observe(&raw, update_stats);
         self.next_start = vec![1.0; self.cfg.num_envs];
         self.hidden = self.policy.initial_state(self.cfg.num_envs)?;
         self.rew_scaler.acc.iter_mut().for_each(|a| *a = 0.0);
@@ -639,7 +640,7 @@ impl Trainer {
         self.rng_mb = rng_mb;
         self.update = st.update;
         self.global_step = st.global_step;
-        self.restart_envs()
+        self.restart_envs(false)
     }
 }
 
@@ -713,6 +714,74 @@ pub fn explained_variance(y_pred: &[f32], y: &[f32]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::env::cartpole::CartPole;
+    use crate::policy::{PolicyConfig, PolicyKind};
+
+    /// Replaying a rollout as whole sequences from the kept initial state, with the
+    /// recorded episode starts, reproduces the log-probabilities and values computed while
+    /// acting (so the first PPO ratio is 1), across episode boundaries inside the rollout.
+    #[test]
+    fn recurrent_replay_matches_the_rollout() {
+        let cfg = PpoConfig {
+            num_envs: 3,
+            num_steps: 40,
+            num_minibatches: 3,
+            total_timesteps: 1000,
+            policy: PolicyConfig {
+                kind: PolicyKind::Gru,
+                embed_dim: 8,
+                gru_hidden: 8,
+                ..PolicyConfig::default()
+            },
+            ..PpoConfig::default()
+        };
+        let envs: Vec<Box<dyn Env>> = (0..3)
+            .map(|_| Box::new(CartPole::new(15)) as Box<dyn Env>)
+            .collect();
+        let mut t = Trainer::new(cfg, envs).unwrap();
+        // A first rollout so the second starts from a non-zero recurrent state.
+        t.rollout().unwrap();
+        let buf = t.rollout().unwrap();
+        assert!(
+            buf.truncated.iter().any(|&x| x),
+            "episodes should end inside the rollout"
+        );
+        let h0 = buf.initial_hidden.clone().unwrap();
+        assert!(
+            h0.abs()
+                .unwrap()
+                .sum_all()
+                .unwrap()
+                .to_scalar::<f32>()
+                .unwrap()
+                > 0.0
+        );
+        let cpu = Device::Cpu;
+        let obs = Tensor::from_slice(&buf.obs, (40, 3, 4), &cpu).unwrap();
+        let starts = Tensor::from_slice(&buf.starts, (40, 3), &cpu).unwrap();
+        let out = t.policy.forward_seq(&obs, &starts, Some(&h0)).unwrap();
+        let cont = Tensor::from_slice(&buf.cont, (120, 1), &cpu).unwrap();
+        let lp = out
+            .dist
+            .log_prob(&cont, None)
+            .unwrap()
+            .to_vec1::<f32>()
+            .unwrap();
+        let v = out.value.to_vec1::<f32>().unwrap();
+        for i in 0..120 {
+            assert!(
+                (lp[i] - buf.log_probs[i]).abs() < 1e-4,
+                "{i}: {} {}",
+                lp[i],
+                buf.log_probs[i]
+            );
+            assert!((v[i] - buf.values[i]).abs() < 1e-4, "{i}");
+        }
+        // Without the kept initial state the replay would differ.
+        let out0 = t.policy.forward_seq(&obs, &starts, None).unwrap();
+        let v0 = out0.value.to_vec1::<f32>().unwrap();
+        assert!((0..120).any(|i| (v0[i] - buf.values[i]).abs() > 1e-4));
+    }
 
     #[test]
     fn advantage_normalisation_by_hand() {
