@@ -304,6 +304,24 @@ fn checkpoint_round_trip_and_errors() {
     let e = Trainer::resume(bad.path(), cartpoles(4, 20)).err().unwrap();
     assert!(matches!(e, PpoError::CheckpointFormat { .. }), "{e}");
 
+    // Wrong shape: a file whose `critic.weight` was stored with another shape.
+    let mut ck = grasp::ppo::checkpoint::read_checkpoint(&path).unwrap();
+    let w = ck.tensors.get_mut("critic.weight").unwrap();
+    w.shape = vec![w.shape[1], w.shape[0]];
+    let tensors: Vec<_> = ck.tensors.values().cloned().collect();
+    let shaped = tempfile::tempdir().unwrap();
+    grasp::ppo::checkpoint::write_checkpoint(
+        &shaped.path().join("checkpoint.safetensors"),
+        &ck.state,
+        &tensors,
+    )
+    .unwrap();
+    let e = Trainer::resume(shaped.path(), cartpoles(4, 20))
+        .err()
+        .unwrap();
+    assert!(matches!(e, PpoError::CheckpointShape { .. }), "{e}");
+    assert!(e.to_string().contains("critic.weight"), "{e}");
+
     // Wrong architecture: a trainer with a bigger GRU refuses the file.
     let mut big = cfg.clone();
     big.policy.gru_hidden = 32;
