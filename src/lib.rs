@@ -8,9 +8,15 @@
 //! - [`synergy`]: pose datasets and PCA hand synergies (P and P^-1 of eq. 2).
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
+//! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
+//!   textbook control task.
+//! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
+//! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 
 pub mod env;
 pub mod objects;
+pub mod policy;
+pub mod ppo;
 pub mod robot;
 pub mod synergy;
 pub mod util;

@@ -1,11 +1,16 @@
-//! The grasping MDP of Sec. IV: observations, actions, reward, curriculum.
+//! Environments: the gymnasium-style API the learner trains on, the grasping MDP of
+//! Sec. IV, and a textbook control task to prove the learner.
 //!
+//! - [`api`]: the `Env` trait and the parallel `VecEnv`.
 //! - [`action`]: decoding and scaling of the policy output.
 //! - [`obs`]: the observation frame `<a_{k-1}, phi, tau, theta>`, modalities, history.
 //! - [`reward`]: eq. 4 and eq. 5.
 //! - [`curriculum`]: eq. 6.
+//! - [`cartpole`]: continuous CartPole, the learner's textbook check.
 
 pub mod action;
+pub mod api;
+pub mod cartpole;
 pub mod curriculum;
 pub mod obs;
 pub mod reward;

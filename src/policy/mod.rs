@@ -1,0 +1,305 @@
+//! Actor-critic policies on candle (CPU): a GRU policy and an MLP policy, their action
+//! distribution (SPEC eq. 3) and orthogonal initialisation.
+//!
+//! Parameter names are stable and PyTorch-like so checkpoints can be read elsewhere:
+//!
+//! | policy | parameters |
+//! |---|---|
+//! | [`GruPolicy`] | `embed.{weight,bias}`, `gru.{weight_ih_l0,weight_hh_l0,bias_ih_l0,bias_hh_l0}`, `actor.mean.{weight,bias}`, `actor.log_std`, `actor.lift.{weight,bias}` (lift only), `critic.{weight,bias}` |
+//! | [`MlpPolicy`] | `actor.fc1.*`, `actor.fc2.*`, `actor.mean.*`, `actor.log_std`, `actor.lift.*` (lift only), `critic.fc1.*`, `critic.fc2.*`, `critic.out.*` |
+//!
+//! Initialisation (CleanRL): orthogonal weights with gain sqrt(2) for hidden layers, 0.01
+//! for the actor's mean and lift heads, 1.0 for the critic's output and the GRU, zero biases,
+//! `actor.log_std` = `init_log_std`. All of it is drawn from one ChaCha8 RNG seeded by the
+//! model seed, layer by layer in a fixed order.
+
+pub mod dist;
+mod gru;
+pub mod init;
+mod mlp;
+
+pub use dist::{ActionDist, SampledActions};
+pub use gru::GruPolicy;
+pub use mlp::MlpPolicy;
+
+use crate::env::api::ActionSpec;
+use candle_core::{DType, Device, Tensor, Var};
+use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeMap;
+
+/// Errors while building or running a policy.
+#[derive(Debug, thiserror::Error)]
+pub enum PolicyError {
+    /// A tensor operation failed.
+    #[error("tensor operation failed: {0}")]
+    Candle(#[from] candle_core::Error),
+    /// A policy setting is out of range.
+    #[error("invalid policy setting `{field}`: {message}")]
+    Config {
+        /// The offending field.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Which network the policy uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PolicyKind {
+    /// [`GruPolicy`]: Linear embedding + tanh, one GRU layer, actor and critic heads.
+    Gru,
+    /// [`MlpPolicy`]: separate 2-layer tanh MLPs for the actor and the critic.
+    Mlp,
+}
+
+/// Architecture settings of a policy.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PolicyConfig {
+    /// The network: "gru" (default) or "mlp".
+    pub kind: PolicyKind,
+    /// Width of the MLP's two hidden layers (64).
+    pub mlp_hidden: usize,
+    /// Width of the GRU policy's embedding layer (128).
+    pub embed_dim: usize,
+    /// Size of the GRU's hidden state (128).
+    pub gru_hidden: usize,
+    /// Initial log standard deviation of the Gaussian (0.0: std 1).
+    pub init_log_std: f32,
+}
+
+impl Default for PolicyConfig {
+    fn default() -> Self {
+        Self {
+            kind: PolicyKind::Gru,
+            mlp_hidden: 64,
+            embed_dim: 128,
+            gru_hidden: 128,
+            init_log_std: 0.0,
+        }
+    }
+}
+
+impl PolicyConfig {
+    /// Checks the settings' ranges.
+    pub fn validate(&self) -> Result<(), PolicyError> {
+        let positive = |field: &'static str, v: usize| {
+            if v == 0 || v > 65_536 {
+                Err(PolicyError::Config {
+                    field,
+                    message: format!("{v} must be in 1..=65536"),
+                })
+            } else {
+                Ok(())
+            }
+        };
+        positive("mlp_hidden", self.mlp_hidden)?;
+        positive("embed_dim", self.embed_dim)?;
+        positive("gru_hidden", self.gru_hidden)?;
+        if !self.init_log_std.is_finite() || self.init_log_std.abs() > 20.0 {
+            return Err(PolicyError::Config {
+                field: "init_log_std",
+                message: format!("{} must be finite and within [-20, 20]", self.init_log_std),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The output of a policy over a batch of N = T * B observations (time-major).
+#[derive(Debug, Clone)]
+pub struct PolicyOutput {
+    /// The action distribution.
+    pub dist: ActionDist,
+    /// State values, shape (N).
+    pub value: Tensor,
+    /// The recurrent state after the last time step, shape (B, hidden); `None` for a
+    /// feed-forward policy.
+    pub hidden: Option<Tensor>,
+}
+
+/// An actor-critic network.
+pub trait ActorCritic: Send + Sync {
+    /// Length of the (stacked) observation vector it reads.
+    fn obs_dim(&self) -> usize;
+    /// The shape of the actions it outputs.
+    fn action_spec(&self) -> ActionSpec;
+    /// Size of the recurrent state, 0 for a feed-forward network.
+    fn hidden_dim(&self) -> usize;
+    /// The trainable parameters by name.
+    fn params(&self) -> &Params;
+    /// Runs the network over a sequence: `obs` (T, B, obs_dim), `starts` (T, B) with 1.0
+    /// where an observation is the first of an episode (the recurrent state is zeroed
+    /// there, `h = h * (1 - start)`, before the step), and the initial recurrent state `h0`
+    /// (B, hidden) of a recurrent network. The outputs are flattened time-major: row
+    /// `t * B + b`.
+    fn forward_seq(
+        &self,
+        obs: &Tensor,
+        starts: &Tensor,
+        h0: Option<&Tensor>,
+    ) -> Result<PolicyOutput, PolicyError>;
+
+    /// A zero recurrent state for `batch` sequences (`None` when feed-forward).
+    fn initial_state(&self, batch: usize) -> Result<Option<Tensor>, PolicyError> {
+        let h = self.hidden_dim();
+        if h == 0 {
+            return Ok(None);
+        }
+        Ok(Some(Tensor::zeros((batch, h), DType::F32, &Device::Cpu)?))
+    }
+}
+
+/// Builds the policy `cfg` describes for observations of length `obs_dim` and actions
+/// `spec`, initialised from `seed`.
+pub fn build_policy(
+    cfg: &PolicyConfig,
+    obs_dim: usize,
+    spec: ActionSpec,
+    seed: u64,
+) -> Result<Box<dyn ActorCritic>, PolicyError> {
+    cfg.validate()?;
+    if obs_dim == 0 {
+        return Err(PolicyError::Config {
+            field: "obs_dim",
+            message: "the observation is empty".into(),
+        });
+    }
+    if spec.continuous == 0 {
+        return Err(PolicyError::Config {
+            field: "action_spec.continuous",
+            message: "the action needs at least one continuous component".into(),
+        });
+    }
+    Ok(match cfg.kind {
+        PolicyKind::Gru => Box::new(GruPolicy::new(cfg, obs_dim, spec, seed)?),
+        PolicyKind::Mlp => Box::new(MlpPolicy::new(cfg, obs_dim, spec, seed)?),
+    })
+}
+
+/// Named trainable parameters, sorted by name (the order in which they are saved, clipped
+/// and optimised).
+#[derive(Debug, Default)]
+pub struct Params {
+    vars: BTreeMap<String, Var>,
+}
+
+impl Params {
+    /// The parameters by name.
+    pub fn vars(&self) -> &BTreeMap<String, Var> {
+        &self.vars
+    }
+
+    /// Total number of scalar parameters.
+    pub fn count(&self) -> usize {
+        self.vars.values().map(|v| v.elem_count()).sum()
+    }
+
+    /// Adds a parameter and returns its tensor (which tracks gradients).
+    fn add(&mut self, name: &str, data: Vec<f32>, shape: &[usize]) -> candle_core::Result<Tensor> {
+        let t = Tensor::from_vec(data, shape, &Device::Cpu)?;
+        let v = Var::from_tensor(&t)?;
+        let out = v.as_tensor().clone();
+        self.vars.insert(name.to_string(), v);
+        Ok(out)
+    }
+
+    /// Adds an orthogonally initialised `out x inp` Linear layer `name.{weight,bias}`.
+    fn linear(
+        &mut self,
+        name: &str,
+        inp: usize,
+        out: usize,
+        gain: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> candle_core::Result<candle_nn::Linear> {
+        let w = self.add(
+            &format!("{name}.weight"),
+            init::orthogonal(out, inp, gain, rng),
+            &[out, inp],
+        )?;
+        let b = self.add(&format!("{name}.bias"), vec![0.0; out], &[out])?;
+        Ok(candle_nn::Linear::new(w, Some(b)))
+    }
+}
+
+/// Gain sqrt(2) for hidden layers followed by tanh/ReLU.
+pub(crate) const GAIN_HIDDEN: f64 = std::f64::consts::SQRT_2;
+/// Gain for the actor's mean and lift heads.
+pub(crate) const GAIN_ACTOR: f64 = 0.01;
+/// Gain for the critic's output.
+pub(crate) const GAIN_CRITIC: f64 = 1.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_pytorch_like_and_init_is_seeded() {
+        let spec = ActionSpec {
+            continuous: 2,
+            lift: true,
+        };
+        let g = build_policy(&PolicyConfig::default(), 6, spec, 1).unwrap();
+        let names: Vec<&str> = g.params().vars().keys().map(|s| s.as_str()).collect();
+        assert_eq!(
+            names,
+            vec![
+                "actor.lift.bias",
+                "actor.lift.weight",
+                "actor.log_std",
+                "actor.mean.bias",
+                "actor.mean.weight",
+                "critic.bias",
+                "critic.weight",
+                "embed.bias",
+                "embed.weight",
+                "gru.bias_hh_l0",
+                "gru.bias_ih_l0",
+                "gru.weight_hh_l0",
+                "gru.weight_ih_l0",
+            ]
+        );
+        assert_eq!(
+            g.params().vars()["gru.weight_ih_l0"].dims(),
+            &[3 * 128, 128]
+        );
+        let cfg = PolicyConfig {
+            kind: PolicyKind::Mlp,
+            ..PolicyConfig::default()
+        };
+        let m = build_policy(&cfg, 6, spec, 1).unwrap();
+        assert!(m.params().vars().contains_key("critic.out.weight"));
+        assert!(m.params().vars().contains_key("actor.fc2.weight"));
+        let m2 = build_policy(&cfg, 6, spec, 1).unwrap();
+        let m3 = build_policy(&cfg, 6, spec, 2).unwrap();
+        let w = |p: &dyn ActorCritic| {
+            p.params().vars()["actor.fc1.weight"]
+                .flatten_all()
+                .unwrap()
+                .to_vec1::<f32>()
+                .unwrap()
+        };
+        assert_eq!(w(m.as_ref()), w(m2.as_ref()));
+        assert_ne!(w(m.as_ref()), w(m3.as_ref()));
+    }
+
+    #[test]
+    fn bad_settings_are_errors() {
+        let cfg = PolicyConfig {
+            gru_hidden: 0,
+            ..PolicyConfig::default()
+        };
+        let spec = ActionSpec {
+            continuous: 1,
+            lift: false,
+        };
+        let e = build_policy(&cfg, 3, spec, 0).err().unwrap();
+        assert!(e.to_string().contains("gru_hidden"), "{e}");
+        let e = build_policy(&PolicyConfig::default(), 0, spec, 0)
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("obs_dim"), "{e}");
+    }
+}
