@@ -7,9 +7,11 @@
 //!   UR10e kinematics.
 //! - [`synergy`]: pose datasets and PCA hand synergies (P and P^-1 of eq. 2).
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
+//! - [`hardware`]: the robot interface, sensor mapping, safety layer, logs, point clouds.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 
 pub mod env;
+pub mod hardware;
 pub mod objects;
 pub mod robot;
 pub mod synergy;
