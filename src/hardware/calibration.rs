@@ -152,8 +152,10 @@ impl TactileCalibration {
     /// Saves the calibration as pretty JSON, atomically.
     pub fn save(&self, path: &Path) -> Result<(), CalibrationError> {
         self.validate()?;
-        // Serialising a struct of finite floats cannot fail.
-        let text = serde_json::to_string_pretty(self).unwrap_or_default();
+        let text = serde_json::to_string_pretty(self).map_err(|e| CalibrationError::Parse {
+            path: path.to_path_buf(),
+            detail: format!("cannot serialise the calibration: {e}"),
+        })?;
         crate::util::fsx::write_atomic(path, text.as_bytes())?;
         Ok(())
     }
