@@ -24,13 +24,13 @@ pub mod torque;
 use crate::robot::joints::HAND_JOINTS;
 
 /// Number of hand joint angles read from the hand (paper order, see
-/// [`HAND_JOINTS`](crate::robot::joints::HAND_JOINTS)).
-pub const N_HAND_JOINTS: usize = 24;
+/// [`HAND_JOINTS`]).
+pub const N_HAND_JOINTS: usize = crate::env::obs::N_JOINTS;
 /// Number of fingertip tactile sensors (FF, MF, RF, LF, TH).
-pub const N_TACTILE: usize = 5;
+pub const N_TACTILE: usize = crate::env::obs::N_TACTILE;
 /// Number of tendon-force channels, one per actuator (see
 /// [`actuators`](crate::robot::joints::actuators)).
-pub const N_TENDONS: usize = 20;
+pub const N_TENDONS: usize = crate::env::obs::N_TORQUE;
 /// Number of UR10e arm joints.
 pub const N_ARM_JOINTS: usize = 6;
 

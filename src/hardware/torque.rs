@@ -4,7 +4,7 @@
 //! At the start of every grasp attempt, with the hand empty, the baseline `tau_j0` is
 //! recorded (the mean of a few readings); during the attempt the mapped value
 //! `tau_j - tau_j0` is turned into a level 0..5 by
-//! [`torque_level`](crate::env::obs::torque_level), the same function the simulator uses,
+//! [`torque_level`], the same function the simulator uses,
 //! with the real robot's thresholds {-200, -100, 0, 100, 200}.
 
 use super::N_TENDONS;
