@@ -7,6 +7,7 @@
 //!   UR10e kinematics.
 //! - [`synergy`]: pose datasets and PCA hand synergies (P and P^-1 of eq. 2).
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
+//! - [`hardware`]: the robot interface, sensor mapping, safety layer, logs, point clouds.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
 //!   textbook control task.
@@ -14,6 +15,7 @@
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 
 pub mod env;
+pub mod hardware;
 pub mod objects;
 pub mod policy;
 pub mod ppo;
