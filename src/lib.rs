@@ -7,9 +7,11 @@
 //!   UR10e kinematics.
 //! - [`synergy`]: pose datasets and PCA hand synergies (P and P^-1 of eq. 2).
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
+//! - [`sim`]: the Rapier simulation of hand, table and object, with tactile and torque sensing.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 
 pub mod objects;
 pub mod robot;
+pub mod sim;
 pub mod synergy;
 pub mod util;
