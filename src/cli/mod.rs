@@ -3,7 +3,9 @@
 
 use clap::{Args, Parser, Subcommand};
 
+mod bench;
 mod robot;
+mod sim;
 
 /// Flags shared by every subcommand.
 #[derive(Debug, Clone, Args)]
@@ -38,6 +40,10 @@ pub struct Cli {
 pub enum Command {
     /// Inspect the hand and arm model: joint table, coupling, fingertips, URDF, IK.
     Robot(robot::RobotArgs),
+    /// Run one scripted close-and-lift in the simulator and print the sensors per step.
+    Sim(sim::SimArgs),
+    /// Measure throughput (`grasp bench sim`).
+    Bench(bench::BenchArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -65,5 +71,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     let global = cli.global;
     match cli.command {
         Command::Robot(a) => robot::run(a, &global),
+        Command::Sim(a) => sim::run(a, &global),
+        Command::Bench(a) => bench::run(a, &global),
     }
 }

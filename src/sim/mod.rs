@@ -1,6 +1,7 @@
 //! The simulator: the Shadow hand on a Cartesian lift grasping one object on a table, in
 //! Rapier, with tactile and torque sensing (issue 3).
 //!
+//! - [`bench`]: throughput measurement (one env and many in a rayon pool).
 //! - [`config`]: [`SimConfig`], every number, with defaults and validation.
 //! - [`world`]: [`HandSim`], building, reset, targets, stepping, sensors, lift and judgement.
 //! - [`sensors`]: the PD effort read-back and the torque levels.
@@ -8,6 +9,7 @@
 //! - [`object`]: primitive objects.
 //! - [`script`]: the scripted close-and-lift used by `grasp sim` and the tests.
 
+pub mod bench;
 pub mod config;
 pub mod object;
 pub mod placement;

@@ -261,7 +261,6 @@ pub struct HandSim {
     targets: [f64; 24],
     lift_target: f64,
     physics_steps: u64,
-    time: f64,
     failure: Option<PhysicsFailure>,
 }
 
@@ -564,7 +563,6 @@ impl HandSim {
             targets: [0.0; 24],
             lift_target: 0.0,
             physics_steps: 0,
-            time: 0.0,
             failure: None,
         };
         sim.insert_object(object);
@@ -650,7 +648,6 @@ impl HandSim {
         self.ccd = CCDSolver::new();
         self.soft = SoftBodySet::new();
         self.physics_steps = 0;
-        self.time = 0.0;
         self.failure = None;
         // Lift frames: frame1 at the flange position with x along world z; the forearm at
         // `root_pose` when the lift coordinate is 0.
@@ -795,7 +792,7 @@ impl HandSim {
 
     /// Simulated seconds since the last reset.
     pub fn time(&self) -> f64 {
-        self.time
+        self.physics_steps as f64 * self.cfg.dt
     }
 
     /// Runs one physics step; returns false (and records the failure) when the physics
@@ -823,7 +820,6 @@ impl HandSim {
             );
         }));
         self.physics_steps += 1;
-        self.time += self.cfg.dt;
         self.failure = if stepped.is_err() {
             Some(PhysicsFailure::Panic)
         } else {
