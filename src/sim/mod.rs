@@ -1,7 +1,7 @@
 //! The simulator: the Shadow hand on a Cartesian lift grasping one object on a table, in
 //! Rapier, with tactile and torque sensing (issue 3).
 //!
-//! - [`bench`]: throughput measurement (one env and many in a rayon pool).
+//! - [`bench`](mod@bench): throughput measurement (one env and many in a rayon pool).
 //! - [`config`]: [`SimConfig`], every number, with defaults and validation.
 //! - [`world`]: [`HandSim`], building, reset, targets, stepping, sensors, lift and judgement.
 //! - [`sensors`]: the PD effort read-back and the torque levels.
