@@ -8,6 +8,7 @@
 //! - [`synergy`]: pose datasets and PCA hand synergies (P and P^-1 of eq. 2).
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
 //! - [`hardware`]: the robot interface, sensor mapping, safety layer, logs, point clouds.
+//! - [`sim`]: the Rapier simulation of hand, table and object, with tactile and torque sensing.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
 //!   textbook control task.
@@ -20,5 +21,6 @@ pub mod objects;
 pub mod policy;
 pub mod ppo;
 pub mod robot;
+pub mod sim;
 pub mod synergy;
 pub mod util;

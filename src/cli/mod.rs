@@ -3,8 +3,10 @@
 
 use clap::{Args, Parser, Subcommand};
 
+mod bench;
 mod pca;
 mod robot;
+mod sim;
 
 /// Flags shared by every subcommand.
 #[derive(Debug, Clone, Args)]
@@ -41,6 +43,10 @@ pub enum Command {
     Robot(robot::RobotArgs),
     /// Hand synergies: fit a PCA model to a pose dataset, draw the synergies.
     Pca(pca::PcaArgs),
+    /// Run one scripted close-and-lift in the simulator and print the sensors per step.
+    Sim(sim::SimArgs),
+    /// Measure throughput (`grasp bench sim`).
+    Bench(bench::BenchArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -69,5 +75,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Robot(a) => robot::run(a, &global),
         Command::Pca(a) => pca::run(a, &global),
+        Command::Sim(a) => sim::run(a, &global),
+        Command::Bench(a) => bench::run(a, &global),
     }
 }

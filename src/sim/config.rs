@@ -1,0 +1,312 @@
+//! [`SimConfig`]: every number of the simulator, with defaults, TOML loading and range
+//! validation whose errors name the offending field.
+//!
+//! Units: metres, kilograms, seconds, radians, newtons and newton metres. Motor gains are
+//! those of rapier's `MotorModel::ForceBased`: stiffness in N m/rad (N/m for the lift),
+//! damping in N m s/rad (N s/m for the lift).
+
+use crate::util::config::{parse_toml, ConfigError};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The default config file, also embedded as the built-in defaults.
+pub const DEFAULT_SIM_TOML: &str = include_str!("../../configs/sim.toml");
+
+/// Error of an invalid simulator configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum SimConfigError {
+    /// The TOML could not be read or parsed.
+    #[error(transparent)]
+    Load(#[from] ConfigError),
+    /// A field is out of its allowed range.
+    #[error("sim config: field '{field}' = {value}: {message}")]
+    Range {
+        /// Dotted field name, e.g. `motors.fingers.kp`.
+        field: String,
+        /// The value found.
+        value: f64,
+        /// The allowed range.
+        message: String,
+    },
+}
+
+/// Stiffness, damping of a group of position motors.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gains {
+    /// Stiffness kp (N m/rad, or N/m for the lift).
+    pub kp: f64,
+    /// Damping kd (N m s/rad, or N s/m for the lift).
+    pub kd: f64,
+}
+
+/// Motor gains per joint group.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotorGains {
+    /// FF, MF, RF, LF joints (J5..J1).
+    pub fingers: Gains,
+    /// TH joints.
+    pub thumb: Gains,
+    /// WRJ2 and WRJ1.
+    pub wrist: Gains,
+    /// The prismatic lift joint standing in for the UR10e.
+    pub lift: Gains,
+    /// Largest force the lift motor may apply (N).
+    pub lift_max_force: f64,
+}
+
+/// Contact friction coefficients (combined with the MIN rule).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Friction {
+    /// Hand colliders (rubber pads).
+    pub hand: f64,
+    /// The table top.
+    pub table: f64,
+}
+
+/// Sensor models.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorConfig {
+    /// Normal force (N) above which a fingertip reports contact.
+    pub tactile_threshold: f64,
+    /// Sim torque units per N m (the paper's thresholds are in these units).
+    pub torque_scale: f64,
+    /// Increasing thresholds mapping a torque reading to levels 0..=len.
+    pub torque_thresholds: Vec<f64>,
+}
+
+/// The lift that ends an episode.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LiftConfig {
+    /// How far the hand is raised (m).
+    pub height: f64,
+    /// Duration of the smooth ramp (s).
+    pub ramp_time: f64,
+    /// Hold time after the ramp before judging (s).
+    pub hold_time: f64,
+    /// The object's lowest point must be this high above the table top for success (m).
+    pub success_height: f64,
+}
+
+/// Limits that end an episode with a physics failure.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FailureConfig {
+    /// Largest body speed (m/s).
+    pub max_speed: f64,
+    /// Largest distance of the object from its start position (m).
+    pub max_object_travel: f64,
+    /// Deepest allowed penetration of any contact with the object (m).
+    pub max_penetration: f64,
+}
+
+/// All numbers of the simulator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimConfig {
+    /// Physics time step (s).
+    pub dt: f64,
+    /// Solver substeps per physics step (rapier's `num_solver_iterations`).
+    pub substeps: usize,
+    /// Seconds one control action lasts.
+    pub control_period: f64,
+    /// Gravity along world z (m/s^2, negative: down).
+    pub gravity: f64,
+    /// Motor gains.
+    pub motors: MotorGains,
+    /// Friction coefficients.
+    pub friction: Friction,
+    /// Sensor models.
+    pub sensors: SensorConfig,
+    /// The lift.
+    pub lift: LiftConfig,
+    /// Failure detection.
+    pub failure: FailureConfig,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        // The embedded file is part of the build and covered by a unit test.
+        parse_toml(Path::new("configs/sim.toml"), DEFAULT_SIM_TOML)
+            .unwrap_or_else(|e| panic!("embedded configs/sim.toml is invalid: {e}"))
+    }
+}
+
+impl SimConfig {
+    /// Loads and validates a TOML file.
+    pub fn load(path: &Path) -> Result<SimConfig, SimConfigError> {
+        let c: SimConfig = crate::util::config::load_toml(path)?;
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Parses and validates TOML text (`path` names it in errors).
+    pub fn parse(path: &Path, text: &str) -> Result<SimConfig, SimConfigError> {
+        let c: SimConfig = parse_toml(path, text)?;
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Number of physics steps in one control period (at least 1).
+    pub fn steps_per_control(&self) -> usize {
+        ((self.control_period / self.dt).round() as usize).max(1)
+    }
+
+    /// Checks every number's range; the error names the first bad field.
+    pub fn validate(&self) -> Result<(), SimConfigError> {
+        fn bad(field: &str, value: f64, message: &str) -> SimConfigError {
+            SimConfigError::Range {
+                field: field.into(),
+                value,
+                message: message.into(),
+            }
+        }
+        let pos = |f: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(f, v, "must be a finite number > 0"))
+            }
+        };
+        let nonneg = |f: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(bad(f, v, "must be a finite number >= 0"))
+            }
+        };
+        let fric = |f: &str, v: f64| {
+            if v.is_finite() && (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(bad(f, v, "friction must be in [0, 1]"))
+            }
+        };
+        pos("dt", self.dt)?;
+        if self.dt > 0.05 {
+            return Err(bad("dt", self.dt, "must be at most 0.05 s"));
+        }
+        if !(1..=64).contains(&self.substeps) {
+            return Err(bad("substeps", self.substeps as f64, "must be in 1..=64"));
+        }
+        pos("control_period", self.control_period)?;
+        if self.control_period < self.dt {
+            return Err(bad(
+                "control_period",
+                self.control_period,
+                "must be at least dt",
+            ));
+        }
+        if !self.gravity.is_finite() || self.gravity.abs() > 100.0 {
+            return Err(bad("gravity", self.gravity, "must be finite, |g| <= 100"));
+        }
+        for (name, g) in [
+            ("fingers", self.motors.fingers),
+            ("thumb", self.motors.thumb),
+            ("wrist", self.motors.wrist),
+            ("lift", self.motors.lift),
+        ] {
+            pos(&format!("motors.{name}.kp"), g.kp)?;
+            nonneg(&format!("motors.{name}.kd"), g.kd)?;
+        }
+        pos("motors.lift_max_force", self.motors.lift_max_force)?;
+        fric("friction.hand", self.friction.hand)?;
+        fric("friction.table", self.friction.table)?;
+        nonneg("sensors.tactile_threshold", self.sensors.tactile_threshold)?;
+        pos("sensors.torque_scale", self.sensors.torque_scale)?;
+        let th = &self.sensors.torque_thresholds;
+        if th.is_empty() || th.len() > 16 {
+            return Err(bad(
+                "sensors.torque_thresholds",
+                th.len() as f64,
+                "needs 1 to 16 thresholds",
+            ));
+        }
+        for (k, v) in th.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(bad(
+                    &format!("sensors.torque_thresholds[{k}]"),
+                    *v,
+                    "must be finite",
+                ));
+            }
+            if k > 0 && *v <= th[k - 1] {
+                return Err(bad(
+                    &format!("sensors.torque_thresholds[{k}]"),
+                    *v,
+                    "thresholds must increase",
+                ));
+            }
+        }
+        pos("lift.height", self.lift.height)?;
+        if self.lift.height > 1.0 {
+            return Err(bad("lift.height", self.lift.height, "must be at most 1 m"));
+        }
+        pos("lift.ramp_time", self.lift.ramp_time)?;
+        nonneg("lift.hold_time", self.lift.hold_time)?;
+        nonneg("lift.success_height", self.lift.success_height)?;
+        pos("failure.max_speed", self.failure.max_speed)?;
+        pos("failure.max_object_travel", self.failure.max_object_travel)?;
+        pos("failure.max_penetration", self.failure.max_penetration)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_defaults_are_valid() {
+        let c = SimConfig::default();
+        c.validate().unwrap();
+        assert_eq!(
+            c.sensors.torque_thresholds,
+            vec![-20.0, -10.0, 0.0, 10.0, 20.0]
+        );
+        assert_eq!(
+            c.steps_per_control(),
+            (c.control_period / c.dt).round() as usize
+        );
+    }
+
+    #[test]
+    fn out_of_range_fields_are_named() {
+        let mut c = SimConfig::default();
+        c.friction.hand = 1.2;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("friction.hand"), "{e}");
+        let c = SimConfig {
+            dt: 0.0,
+            ..Default::default()
+        };
+        assert!(c.validate().unwrap_err().to_string().contains("'dt'"));
+        let mut c = SimConfig::default();
+        c.motors.thumb.kp = f64::NAN;
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("motors.thumb.kp"));
+        let mut c = SimConfig::default();
+        c.sensors.torque_thresholds = vec![0.0, -1.0];
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("torque_thresholds[1]"));
+    }
+
+    #[test]
+    fn unknown_key_is_an_error_with_line() {
+        let text = DEFAULT_SIM_TOML.replace("substeps =", "substepz =");
+        let e = SimConfig::parse(Path::new("s.toml"), &text)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("s.toml") && e.contains("substepz"), "{e}");
+    }
+}

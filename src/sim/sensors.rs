@@ -1,0 +1,77 @@
+//! Sensor models: the PD motor effort a joint reports, its mapping to the paper's six
+//! torque levels, and the per-step [`Sensors`] reading.
+//!
+//! Units: efforts are N m (N for the lift). A torque reading in *sim units* is
+//! `effort * torque_scale` (default 100 units per N m), so the paper's simulation
+//! thresholds {-20, -10, 0, 10, 20} are {-0.2, -0.1, 0, 0.1, 0.2} N m.
+
+use serde::Serialize;
+
+/// The effort a position motor applies and reports (rapier gives no read-back):
+/// `clamp(kp * (target - q) - kd * qdot, -effort, +effort)`.
+///
+/// A non-finite input gives a non-finite result only through `q`/`qdot`; `effort` must be
+/// non-negative.
+pub fn pd_effort(kp: f64, kd: f64, target: f64, q: f64, qdot: f64, effort: f64) -> f64 {
+    (kp * (target - q) - kd * qdot).clamp(-effort, effort)
+}
+
+/// Maps a reading (sim units) to a level: the number of thresholds `<= value`. With the
+/// paper's thresholds [-20, -10, 0, 10, 20] the levels are 0..=5; a NaN reading gives 0.
+pub fn torque_level(value: f64, thresholds: &[f64]) -> u8 {
+    thresholds.iter().filter(|t| **t <= value).count() as u8
+}
+
+/// Everything the hand senses at one instant.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Sensors {
+    /// Binary fingertip contact with the object (FF, MF, RF, LF, TH): the distal phalanx
+    /// (with its tip) pushes on the object with a normal force above the threshold.
+    pub tactile: [u8; 5],
+    /// Normal contact force (N) on each distal phalanx from the object.
+    pub tip_force: [f64; 5],
+    /// Actuator efforts (N m), the 20 actuators in the paper's order (coupled J0 = the sum
+    /// of the J1 and J2 efforts).
+    pub effort: [f64; 20],
+    /// Torque levels of the 20 actuators.
+    pub torque_level: [u8; 20],
+    /// The 24 hand joint angles (rad), paper order.
+    pub q: [f64; 24],
+    /// The 24 hand joint velocities (rad/s), paper order.
+    pub qdot: [f64; 24],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const T: [f64; 5] = [-20.0, -10.0, 0.0, 10.0, 20.0];
+
+    #[test]
+    fn levels_hand_computed() {
+        assert_eq!(torque_level(-35.0, &T), 0);
+        assert_eq!(torque_level(-20.0, &T), 1);
+        assert_eq!(torque_level(-15.0, &T), 1);
+        assert_eq!(torque_level(-10.0, &T), 2);
+        assert_eq!(torque_level(-0.5, &T), 2);
+        assert_eq!(torque_level(0.0, &T), 3);
+        assert_eq!(torque_level(9.99, &T), 3);
+        assert_eq!(torque_level(10.0, &T), 4);
+        assert_eq!(torque_level(19.0, &T), 4);
+        assert_eq!(torque_level(20.0, &T), 5);
+        assert_eq!(torque_level(1e9, &T), 5);
+        assert_eq!(torque_level(f64::NAN, &T), 0);
+    }
+
+    #[test]
+    fn pd_effort_hand_computed_and_clamped() {
+        // 2 * (0.5 - 0.2) - 0.02 * 1.0 = 0.58
+        assert!((pd_effort(2.0, 0.02, 0.5, 0.2, 1.0, 2.0) - 0.58).abs() < 1e-12);
+        // 2 * (1.5 - 0) = 3 -> clamped to 2
+        assert_eq!(pd_effort(2.0, 0.0, 1.5, 0.0, 0.0, 2.0), 2.0);
+        // 2 * (-1.5) = -3 -> clamped to -1
+        assert_eq!(pd_effort(2.0, 0.0, -1.5, 0.0, 0.0, 1.0), -1.0);
+        // damping only: -0.1 * 3 = -0.3
+        assert!((pd_effort(2.0, 0.1, 0.0, 0.0, 3.0, 2.0) + 0.3).abs() < 1e-12);
+    }
+}

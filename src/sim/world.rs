@@ -1,0 +1,1199 @@
+//! [`HandSim`]: the Shadow hand on a Cartesian lift, a table and one object in Rapier.
+//!
+//! # Model
+//! - World: z up, gravity `(0, 0, cfg.gravity)`; the table is a fixed cuboid whose top is
+//!   the plane z = 0.
+//! - The hand is ONE multibody. Its root is a fixed anchor body at the world origin; a
+//!   motorised prismatic joint along world z (the "lift") carries the forearm. The lift
+//!   joint's frames hold the flange pose, so placing the hand changes two joint frames, not
+//!   the root. This stands in for the UR10e: a stiff position-controlled Cartesian lift
+//!   (the arm's 6 joints are not simulated; `robot::ur10e` gives their IK).
+//! - Every hand link joined by a movable URDF joint is a multibody link with a revolute
+//!   joint (frames from the URDF `origin`, axis from `axis`, limits from lower/upper).
+//!   Links joined by fixed joints (the fingertip frames) are merged into their parent body.
+//!   Masses and inertias come from the URDF `inertial`; colliders have density 0.
+//! - Motors: `MotorModel::ForceBased` position motors on every hand joint, gains per group
+//!   from [`SimConfig`], max force = the URDF effort limit. Target angles are clamped to the
+//!   joint limits.
+//! - Coupling: for FF, MF, RF, LF the pair J1/J2 is tied RIGIDLY by
+//!   `Multibody::add_dof_coupling` (J1 = J2), and both motors target J0/2, where
+//!   J0 = target(J1) + target(J2). The coupled actuator's reported effort is the sum of
+//!   the J1 and J2 efforts.
+//! - Self-collisions between hand links are disabled by collision groups: hand colliders
+//!   collide with the table and the object only; the object collides with everything.
+//! - Friction: hand 1.0, table 0.8, object from its spec; combine rule MIN everywhere.
+//!
+//! # Reset
+//! The world is built once as a template (bodies, colliders, joints are `Clone`); a reset
+//! clones it, gives it a fresh pipeline, broad phase, narrow phase and island manager,
+//! writes the start posture into the joint coordinates and places hand and object.
+
+use super::config::SimConfig;
+use super::object::{ObjectError, ObjectSpec};
+use super::placement::{hand_root_pose, PlacementError};
+use super::sensors::{pd_effort, torque_level, Sensors};
+use crate::robot::joints::{COUPLED_FINGERS, HAND_JOINTS};
+use crate::robot::model::{Geometry, JointKind};
+use crate::robot::Robot;
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rapier3d::prelude::*;
+use serde::Serialize;
+
+/// Error of the simulator's inputs (never of the physics: see [`PhysicsFailure`]).
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The config is out of range.
+    #[error(transparent)]
+    Config(#[from] super::config::SimConfigError),
+    /// The object description is invalid.
+    #[error(transparent)]
+    Object(#[from] ObjectError),
+    /// The hand cannot be placed.
+    #[error(transparent)]
+    Placement(#[from] PlacementError),
+    /// The robot model has something the simulator cannot build.
+    #[error("robot {robot}: {message}")]
+    Robot {
+        /// The robot's source file.
+        robot: String,
+        /// What is unsupported.
+        message: String,
+    },
+    /// A joint target is NaN or infinite.
+    #[error("joint target {joint} (index {index}) is not finite: {value}")]
+    NonFiniteTarget {
+        /// Joint name (paper order).
+        joint: &'static str,
+        /// Index in the 24-vector.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// A scene number is NaN or infinite.
+    #[error("scene: {what} is not finite")]
+    NonFiniteScene {
+        /// Which input.
+        what: &'static str,
+    },
+}
+
+/// Why the physics was declared broken; the episode ends, nothing panics.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum PhysicsFailure {
+    /// A position or velocity became NaN or infinite (or rapier quarantined a body).
+    NonFinite,
+    /// A body moved faster than the bound.
+    TooFast {
+        /// Speed (m/s).
+        speed: f64,
+    },
+    /// The object left the scene.
+    ObjectLost {
+        /// Distance from its start (m).
+        distance: f64,
+    },
+    /// A contact with the object penetrated too deep.
+    DeepPenetration {
+        /// Penetration depth (m).
+        depth: f64,
+    },
+    /// The rapier step panicked (caught).
+    Panic,
+}
+
+/// Where hand and object start an episode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scene {
+    /// The 24 start joint angles (paper order).
+    pub start: [f64; 24],
+    /// Object centre x, y on the table (m); it rests on the table top.
+    pub object_xy: [f64; 2],
+    /// Object yaw about z (rad).
+    pub object_yaw: f64,
+    /// Grasp point (TH/LF tip midpoint) in the world (m).
+    pub grasp_point: [f64; 3],
+    /// Hand yaw: direction of the thumb-to-little-finger line (rad).
+    pub hand_yaw: f64,
+}
+
+impl Scene {
+    /// The hand above the object's centre: grasp point at the centre plus `z_offset`, the
+    /// object at the origin with yaw 0, the hand at `hand_yaw`.
+    pub fn above(object: &ObjectSpec, start: [f64; 24], z_offset: f64, hand_yaw: f64) -> Scene {
+        Scene {
+            start,
+            object_xy: [0.0, 0.0],
+            object_yaw: 0.0,
+            grasp_point: [0.0, 0.0, object.shape.rest_height() + z_offset],
+            hand_yaw,
+        }
+    }
+
+    /// [`Scene::above`] with uniform noise: x/y of the grasp point within `+-xy_noise` m and
+    /// the hand yaw within `+-yaw_noise` rad, drawn from `ChaCha8Rng::seed_from_u64(seed)`.
+    pub fn randomized(
+        object: &ObjectSpec,
+        start: [f64; 24],
+        z_offset: f64,
+        xy_noise: f64,
+        yaw_noise: f64,
+        seed: u64,
+    ) -> Scene {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut s = Scene::above(object, start, z_offset, 0.0);
+        let mut u = |a: f64| {
+            if a > 0.0 {
+                rng.random_range(-a..=a)
+            } else {
+                0.0
+            }
+        };
+        s.grasp_point[0] += u(xy_noise);
+        s.grasp_point[1] += u(xy_noise);
+        s.hand_yaw += u(yaw_noise);
+        s
+    }
+
+    fn check(&self) -> Result<(), SimError> {
+        let bad = |what| Err(SimError::NonFiniteScene { what });
+        if self.start.iter().any(|v| !v.is_finite()) {
+            return bad("start posture");
+        }
+        if self.object_xy.iter().any(|v| !v.is_finite()) || !self.object_yaw.is_finite() {
+            return bad("object pose");
+        }
+        if self.grasp_point.iter().any(|v| !v.is_finite()) {
+            return bad("grasp point");
+        }
+        if !self.hand_yaw.is_finite() {
+            return bad("hand yaw");
+        }
+        Ok(())
+    }
+}
+
+/// Result of the lift that ends an episode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LiftOutcome {
+    /// The object is held: lowest point high enough and in contact with the hand.
+    pub success: bool,
+    /// The object's lowest point above the table top at the end (m).
+    pub object_lowest_z: f64,
+    /// Whether the object touches the hand at the end.
+    pub in_contact: bool,
+    /// Set when the physics broke during the episode.
+    pub failure: Option<PhysicsFailure>,
+}
+
+/// The state of the whole rapier world that a reset restores.
+#[derive(Clone)]
+struct Sets {
+    bodies: RigidBodySet,
+    colliders: ColliderSet,
+    impulse_joints: ImpulseJointSet,
+    multibody_joints: MultibodyJointSet,
+}
+
+/// One simulated hand joint.
+#[derive(Debug, Clone, Copy)]
+struct HandJoint {
+    link: usize,
+    kp: f64,
+    kd: f64,
+    effort: f64,
+    lower: f64,
+    upper: f64,
+}
+
+/// A hand body and the URDF links merged into it, with their poses in the body frame.
+type BodyLinks = (RigidBodyHandle, Vec<(usize, Isometry3<f64>)>);
+
+const HAND_GROUP: Group = Group::GROUP_1;
+const TABLE_GROUP: Group = Group::GROUP_2;
+const OBJECT_GROUP: Group = Group::GROUP_3;
+/// Mass given to a body whose links have no inertial (kg).
+const MIN_LINK_MASS: f64 = 1e-3;
+
+fn pose_f32(p: &Isometry3<f64>) -> Pose {
+    let t = p.translation.vector;
+    let q = p.rotation.quaternion();
+    Pose::from_parts(
+        Vector::new(t.x as f32, t.y as f32, t.z as f32),
+        Rotation::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32).normalize(),
+    )
+}
+
+/// Rotation taking the x axis to `axis` (unit).
+fn x_to(axis: &Vector3<f64>) -> UnitQuaternion<f64> {
+    UnitQuaternion::rotation_between(&Vector3::x(), axis).unwrap_or_else(|| {
+        // axis = -x: turn half a revolution about z.
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
+    })
+}
+
+/// The hand, a table and one object, simulated in Rapier. `Send`: many can be stepped in
+/// parallel with rayon.
+pub struct HandSim {
+    cfg: SimConfig,
+    template: Sets,
+    sets: Sets,
+    pipeline: PhysicsPipeline,
+    islands: IslandManager,
+    broad_phase: DefaultBroadPhase,
+    narrow_phase: NarrowPhase,
+    ccd: CCDSolver,
+    soft: SoftBodySet,
+    params: IntegrationParameters,
+    robot: Robot,
+    mb_root: RigidBodyHandle,
+    lift_link: usize,
+    joints: [HandJoint; 24],
+    hand_bodies: Vec<RigidBodyHandle>,
+    hand_colliders: Vec<ColliderHandle>,
+    distal_colliders: [Vec<ColliderHandle>; 5],
+    object: ObjectSpec,
+    object_body: RigidBodyHandle,
+    object_collider: ColliderHandle,
+    object_start: Vector3<f64>,
+    table: ColliderHandle,
+    targets: [f64; 24],
+    lift_target: f64,
+    physics_steps: u64,
+    failure: Option<PhysicsFailure>,
+}
+
+impl HandSim {
+    /// Builds the world for `robot` (its Shadow hand), `object` and `cfg`, and resets it to
+    /// the object on the table with the open hand 3 cm above its centre.
+    pub fn new(robot: &Robot, object: ObjectSpec, cfg: SimConfig) -> Result<HandSim, SimError> {
+        cfg.validate()?;
+        object.validate()?;
+        let mut sets = Sets {
+            bodies: RigidBodySet::new(),
+            colliders: ColliderSet::new(),
+            impulse_joints: ImpulseJointSet::new(),
+            multibody_joints: MultibodyJointSet::new(),
+        };
+        let min = CoefficientCombineRule::Min;
+        // Table: top at z = 0.
+        let table_body = sets
+            .bodies
+            .insert(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.0, -0.05)));
+        let table = sets.colliders.insert_with_parent(
+            ColliderBuilder::cuboid(1.0, 1.0, 0.05)
+                .friction(cfg.friction.table as f32)
+                .friction_combine_rule(min)
+                .collision_groups(InteractionGroups::new(
+                    TABLE_GROUP,
+                    HAND_GROUP | OBJECT_GROUP,
+                    InteractionTestMode::And,
+                )),
+            table_body,
+            &mut sets.bodies,
+        );
+        // Hand.
+        let err = |message: String| SimError::Robot {
+            robot: robot.source.display().to_string(),
+            message,
+        };
+        let mb_root = sets.bodies.insert(RigidBodyBuilder::fixed());
+        // Body of each link and the link's pose in that body's frame.
+        let mut link_body: Vec<Option<(RigidBodyHandle, Isometry3<f64>)>> =
+            vec![None; robot.links.len()];
+        let mut body_links: Vec<BodyLinks> = Vec::new();
+        // Bodies are created first (masses need all merged links), joints afterwards.
+        let root = robot.root;
+        let mut pending: Vec<(usize, usize)> = Vec::new(); // (joint index, child link)
+        let new_body = |sets: &mut Sets| {
+            sets.bodies
+                .insert(RigidBodyBuilder::dynamic().can_sleep(false))
+        };
+        let rb_root = new_body(&mut sets);
+        link_body[root] = Some((rb_root, Isometry3::identity()));
+        body_links.push((rb_root, vec![(root, Isometry3::identity())]));
+        for (k, j) in robot.joints.iter().enumerate() {
+            let Some((pb, poff)) = link_body[j.parent] else {
+                return Err(err(format!("joint '{}' has an unplaced parent", j.name)));
+            };
+            match j.kind {
+                JointKind::Fixed => {
+                    let off = poff * j.origin;
+                    link_body[j.child] = Some((pb, off));
+                    if let Some(e) = body_links.iter_mut().find(|(b, _)| *b == pb) {
+                        e.1.push((j.child, off));
+                    }
+                }
+                JointKind::Revolute | JointKind::Continuous => {
+                    let b = new_body(&mut sets);
+                    link_body[j.child] = Some((b, Isometry3::identity()));
+                    body_links.push((b, vec![(j.child, Isometry3::identity())]));
+                    pending.push((k, j.child));
+                }
+                JointKind::Prismatic => {
+                    return Err(err(format!(
+                        "joint '{}': prismatic hand joints are not supported",
+                        j.name
+                    )))
+                }
+            }
+        }
+        // Mass properties and colliders per body.
+        let mut hand_colliders = Vec::new();
+        let mut distal_colliders: [Vec<ColliderHandle>; 5] = Default::default();
+        let groups = InteractionGroups::new(
+            HAND_GROUP,
+            TABLE_GROUP | OBJECT_GROUP,
+            InteractionTestMode::And,
+        );
+        for (b, links) in &body_links {
+            let mut mp = MassProperties::default();
+            let mut mass = 0.0;
+            for (l, off) in links {
+                if let Some(i) = &robot.links[*l].inertial {
+                    let m3 = i.inertia.map(|v| v as f32);
+                    let inertia = rapier3d::math::Matrix::from_cols_array(&[
+                        m3[(0, 0)],
+                        m3[(1, 0)],
+                        m3[(2, 0)],
+                        m3[(0, 1)],
+                        m3[(1, 1)],
+                        m3[(2, 1)],
+                        m3[(0, 2)],
+                        m3[(1, 2)],
+                        m3[(2, 2)],
+                    ]);
+                    let local =
+                        MassProperties::with_inertia_matrix(Vector::ZERO, i.mass as f32, inertia);
+                    mp += local.transform_by(&pose_f32(&(off * i.origin)));
+                    mass += i.mass;
+                }
+            }
+            if mass <= 0.0 {
+                let r = 0.01f32;
+                let m = MIN_LINK_MASS as f32;
+                mp = MassProperties::new(Vector::ZERO, m, Vector::splat(0.4 * m * r * r));
+            }
+            if let Some(rb) = sets.bodies.get_mut(*b) {
+                rb.set_additional_mass_properties(mp, false);
+            }
+            for (l, off) in links {
+                let link = &robot.links[*l];
+                for c in &link.collisions {
+                    let pose = off * c.origin;
+                    let (shape, extra) = match &c.geometry {
+                        Geometry::Cuboid { half } => (
+                            SharedShape::cuboid(half.x as f32, half.y as f32, half.z as f32),
+                            Isometry3::identity(),
+                        ),
+                        Geometry::Cylinder { radius, length } => (
+                            SharedShape::cylinder((length / 2.0) as f32, *radius as f32),
+                            Isometry3::rotation(Vector3::x() * std::f64::consts::FRAC_PI_2),
+                        ),
+                        Geometry::Capsule { radius, length } => (
+                            SharedShape::capsule_z((length / 2.0) as f32, *radius as f32),
+                            Isometry3::identity(),
+                        ),
+                        Geometry::Sphere { radius } => {
+                            (SharedShape::ball(*radius as f32), Isometry3::identity())
+                        }
+                        Geometry::Mesh { path, .. } => {
+                            return Err(err(format!(
+                                "link '{}': mesh collision '{}' is not supported by the simulator \
+                                 (use primitive collision geometry)",
+                                link.name,
+                                path.display()
+                            )))
+                        }
+                    };
+                    let h = sets.colliders.insert_with_parent(
+                        ColliderBuilder::new(shape)
+                            .position(pose_f32(&(pose * extra)))
+                            .density(0.0)
+                            .friction(cfg.friction.hand as f32)
+                            .friction_combine_rule(min)
+                            .collision_groups(groups),
+                        *b,
+                        &mut sets.bodies,
+                    );
+                    hand_colliders.push(h);
+                    for f in 0..5 {
+                        if link_body[robot.hand.distal[f]].map(|x| x.0) == Some(*b) {
+                            distal_colliders[f].push(h);
+                        }
+                    }
+                }
+            }
+        }
+        // The lift joint (frames set at reset).
+        let lift = GenericJointBuilder::new(JointAxesMask::LOCKED_PRISMATIC_AXES)
+            .limits(JointAxis::LinX, [-0.5, 1.0])
+            .motor_model(JointAxis::LinX, MotorModel::ForceBased)
+            .motor_max_force(JointAxis::LinX, cfg.motors.lift_max_force as f32)
+            .motor_position(
+                JointAxis::LinX,
+                0.0,
+                cfg.motors.lift.kp as f32,
+                cfg.motors.lift.kd as f32,
+            )
+            .build();
+        sets.multibody_joints
+            .insert(mb_root, rb_root, lift, true)
+            .ok_or_else(|| err("cannot attach the forearm to the lift".into()))?;
+        // Revolute joints.
+        let mut joint_handles = vec![None; robot.joints.len()];
+        for (k, child) in pending {
+            let j = &robot.joints[k];
+            let (pb, poff) = link_body[j.parent].ok_or_else(|| err("unplaced link".into()))?;
+            let (cb, _) = link_body[child].ok_or_else(|| err("unplaced link".into()))?;
+            let a = x_to(&j.axis);
+            let f1 = poff * j.origin * Isometry3::from_parts(Default::default(), a);
+            let f2 = Isometry3::from_parts(Default::default(), a);
+            let name = crate::robot::joints::canonical_name(&j.name);
+            let gains = if name.starts_with("WR") {
+                cfg.motors.wrist
+            } else if name.starts_with("TH") {
+                cfg.motors.thumb
+            } else {
+                cfg.motors.fingers
+            };
+            let mut b = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+                .local_frame1(pose_f32(&f1))
+                .local_frame2(pose_f32(&f2))
+                .motor_model(JointAxis::AngX, MotorModel::ForceBased)
+                .motor_max_force(JointAxis::AngX, j.effort as f32)
+                .motor_position(JointAxis::AngX, 0.0, gains.kp as f32, gains.kd as f32);
+            if j.kind == JointKind::Revolute {
+                b = b.limits(JointAxis::AngX, [j.lower as f32, j.upper as f32]);
+            }
+            let h = sets
+                .multibody_joints
+                .insert(pb, cb, b.build(), true)
+                .ok_or_else(|| err(format!("joint '{}' closes a loop", j.name)))?;
+            joint_handles[k] = Some((h, gains));
+        }
+        // Hand joint table.
+        let mut joints = [HandJoint {
+            link: 0,
+            kp: 0.0,
+            kd: 0.0,
+            effort: 0.0,
+            lower: 0.0,
+            upper: 0.0,
+        }; 24];
+        for (n, &ji) in robot.hand.joints.iter().enumerate() {
+            let (h, gains) = joint_handles[ji]
+                .ok_or_else(|| err(format!("hand joint {} is not movable", HAND_JOINTS[n])))?;
+            let (_, link) = sets
+                .multibody_joints
+                .get(h)
+                .ok_or_else(|| err("lost a joint".into()))?;
+            let jj = &robot.joints[ji];
+            joints[n] = HandJoint {
+                link,
+                kp: gains.kp,
+                kd: gains.kd,
+                effort: jj.effort,
+                lower: jj.lower,
+                upper: jj.upper,
+            };
+        }
+        let lift_link = sets
+            .multibody_joints
+            .rigid_body_link(rb_root)
+            .map(|l| l.id)
+            .ok_or_else(|| err("lost the lift joint".into()))?;
+        // Rigid J1 = J2 coupling.
+        {
+            let mb_index = sets
+                .multibody_joints
+                .rigid_body_link(rb_root)
+                .map(|l| l.multibody)
+                .ok_or_else(|| err("lost the multibody".into()))?;
+            let mb = sets
+                .multibody_joints
+                .get_multibody_mut(mb_index)
+                .ok_or_else(|| err("lost the multibody".into()))?;
+            for f in COUPLED_FINGERS {
+                let j2 = super::hand_index(&format!("{f}J2"));
+                let j1 = super::hand_index(&format!("{f}J1"));
+                mb.add_dof_coupling(MultibodyDofCoupling {
+                    link1: joints[j2].link,
+                    dof1: 0,
+                    axis1: 3,
+                    link2: joints[j1].link,
+                    dof2: 0,
+                    axis2: 3,
+                    coeff: 1.0,
+                    offset: 0.0,
+                });
+            }
+        }
+        let hand_bodies = body_links.iter().map(|(b, _)| *b).collect();
+        // Object placeholder handles, replaced by `set_object`.
+        let mut params = IntegrationParameters {
+            dt: cfg.dt as f32,
+            ..Default::default()
+        };
+        params.num_solver_iterations = cfg.substeps;
+        let mut sim = HandSim {
+            cfg,
+            template: sets.clone(),
+            sets,
+            pipeline: PhysicsPipeline::new(),
+            islands: IslandManager::new(),
+            broad_phase: DefaultBroadPhase::default(),
+            narrow_phase: NarrowPhase::new(),
+            ccd: CCDSolver::new(),
+            soft: SoftBodySet::new(),
+            params,
+            robot: robot.clone(),
+            mb_root: rb_root,
+            lift_link,
+            joints,
+            hand_bodies,
+            hand_colliders,
+            distal_colliders,
+            object,
+            object_body: RigidBodyHandle::invalid(),
+            object_collider: ColliderHandle::invalid(),
+            object_start: Vector3::zeros(),
+            table,
+            targets: [0.0; 24],
+            lift_target: 0.0,
+            physics_steps: 0,
+            failure: None,
+        };
+        sim.insert_object(object);
+        let start = crate::robot::Posture::Open.angles();
+        sim.reset(&Scene::above(&object, start, 0.03, 0.0))?;
+        Ok(sim)
+    }
+
+    fn insert_object(&mut self, object: ObjectSpec) {
+        let t = &mut self.template;
+        if self.object_body != RigidBodyHandle::invalid() {
+            let mut islands = IslandManager::new();
+            t.bodies.remove(
+                self.object_body,
+                &mut islands,
+                &mut t.colliders,
+                &mut t.impulse_joints,
+                &mut t.multibody_joints,
+                &mut SoftBodySet::new(),
+                true,
+            );
+        }
+        let body = t.bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .can_sleep(false)
+                .translation(Vector::new(0.0, 0.0, object.shape.rest_height() as f32)),
+        );
+        let collider = t.colliders.insert_with_parent(
+            object
+                .shape
+                .collider()
+                .mass(object.mass as f32)
+                .friction(object.friction as f32)
+                .friction_combine_rule(CoefficientCombineRule::Min)
+                .collision_groups(InteractionGroups::new(
+                    OBJECT_GROUP,
+                    Group::ALL,
+                    InteractionTestMode::And,
+                )),
+            body,
+            &mut t.bodies,
+        );
+        self.object = object;
+        self.object_body = body;
+        self.object_collider = collider;
+    }
+
+    /// Replaces the object (validated); takes effect at the next [`HandSim::reset`].
+    pub fn set_object(&mut self, object: ObjectSpec) -> Result<(), SimError> {
+        object.validate()?;
+        self.insert_object(object);
+        Ok(())
+    }
+
+    /// The config in use.
+    pub fn config(&self) -> &SimConfig {
+        &self.cfg
+    }
+
+    /// The robot model in use.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// The object in use.
+    pub fn object(&self) -> &ObjectSpec {
+        &self.object
+    }
+
+    /// Restores the template world and places hand and object as `scene` says: joints at the
+    /// start posture (clamped to limits; coupled J1 = J2 = their mean), targets = start,
+    /// object resting on the table, lift at 0.
+    pub fn reset(&mut self, scene: &Scene) -> Result<(), SimError> {
+        scene.check()?;
+        let start = self.clamp_targets(&scene.start);
+        let gp = Point3::from(scene.grasp_point);
+        let root_pose = hand_root_pose(&self.robot, &gp, scene.hand_yaw, &start)?;
+        self.sets = self.template.clone();
+        self.pipeline = PhysicsPipeline::new();
+        self.islands = IslandManager::new();
+        self.broad_phase = DefaultBroadPhase::default();
+        self.narrow_phase = NarrowPhase::new();
+        self.ccd = CCDSolver::new();
+        self.soft = SoftBodySet::new();
+        self.physics_steps = 0;
+        self.failure = None;
+        // Lift frames: frame1 at the flange position with x along world z; the forearm at
+        // `root_pose` when the lift coordinate is 0.
+        let up = x_to(&Vector3::z());
+        let f1 = Isometry3::from_parts(root_pose.translation, up);
+        let f2 = root_pose.inverse() * f1;
+        let Some(link) = self
+            .sets
+            .multibody_joints
+            .rigid_body_link(self.mb_root)
+            .copied()
+        else {
+            return Err(self.lost());
+        };
+        let Some(mb) = self.sets.multibody_joints.get_multibody_mut(link.multibody) else {
+            return Err(self.lost());
+        };
+        if let Some(l) = mb.link_mut(self.lift_link) {
+            l.joint.data.set_local_frame1(pose_f32(&f1));
+            l.joint.data.set_local_frame2(pose_f32(&f2));
+        }
+        let mut disp = vec![0.0f32; mb.ndofs()];
+        for (n, hj) in self.joints.iter().enumerate() {
+            if let Some(l) = mb.link(hj.link) {
+                disp[l.assembly_id()] = start[n] as f32 - l.joint().coords()[3];
+            }
+        }
+        mb.apply_displacements(&disp);
+        mb.forward_kinematics(&self.sets.bodies, false);
+        mb.update_rigid_bodies(&mut self.sets.bodies, true);
+        // Object.
+        let rot = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), scene.object_yaw);
+        let obj_pose = Isometry3::from_parts(
+            Vector3::new(
+                scene.object_xy[0],
+                scene.object_xy[1],
+                self.object.shape.rest_height(),
+            )
+            .into(),
+            rot,
+        );
+        self.object_start = obj_pose.translation.vector;
+        if let Some(rb) = self.sets.bodies.get_mut(self.object_body) {
+            rb.set_position(pose_f32(&obj_pose), true);
+        }
+        self.targets = start;
+        self.lift_target = 0.0;
+        self.apply_targets();
+        Ok(())
+    }
+
+    fn lost(&self) -> SimError {
+        SimError::Robot {
+            robot: self.robot.source.display().to_string(),
+            message: "the hand multibody was lost".into(),
+        }
+    }
+
+    /// Clamps to limits and applies the J1 = J2 = J0/2 coupling.
+    fn clamp_targets(&self, t: &[f64; 24]) -> [f64; 24] {
+        let mut out = *t;
+        for f in COUPLED_FINGERS {
+            let j2 = super::hand_index(&format!("{f}J2"));
+            let j1 = super::hand_index(&format!("{f}J1"));
+            let j0 = out[j2] + out[j1];
+            out[j2] = j0 / 2.0;
+            out[j1] = j0 / 2.0;
+        }
+        for (k, hj) in self.joints.iter().enumerate() {
+            out[k] = out[k].clamp(hj.lower, hj.upper);
+        }
+        out
+    }
+
+    /// Sets the 24 joint targets (paper order; rad). Coupled joints follow J0 = J1 + J2
+    /// (each gets J0/2); every target is clamped to its joint's limits. A NaN or infinite
+    /// target is rejected and nothing changes.
+    pub fn set_targets(&mut self, targets: &[f64; 24]) -> Result<(), SimError> {
+        if let Some((index, value)) = targets
+            .iter()
+            .copied()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite())
+        {
+            return Err(SimError::NonFiniteTarget {
+                joint: HAND_JOINTS[index],
+                index,
+                value,
+            });
+        }
+        self.targets = self.clamp_targets(targets);
+        self.apply_targets();
+        Ok(())
+    }
+
+    /// The current joint targets (after clamping and coupling).
+    pub fn targets(&self) -> [f64; 24] {
+        self.targets
+    }
+
+    fn apply_targets(&mut self) {
+        let Some(link) = self
+            .sets
+            .multibody_joints
+            .rigid_body_link(self.mb_root)
+            .copied()
+        else {
+            return;
+        };
+        let Some(mb) = self.sets.multibody_joints.get_multibody_mut(link.multibody) else {
+            return;
+        };
+        for (n, hj) in self.joints.iter().enumerate() {
+            if let Some(l) = mb.link_mut(hj.link) {
+                l.joint.data.set_motor_position(
+                    JointAxis::AngX,
+                    self.targets[n] as f32,
+                    hj.kp as f32,
+                    hj.kd as f32,
+                );
+            }
+        }
+        if let Some(l) = mb.link_mut(self.lift_link) {
+            l.joint.data.set_motor_position(
+                JointAxis::LinX,
+                self.lift_target as f32,
+                self.cfg.motors.lift.kp as f32,
+                self.cfg.motors.lift.kd as f32,
+            );
+        }
+    }
+
+    /// The physics failure that ended the episode, if any.
+    pub fn failure(&self) -> Option<&PhysicsFailure> {
+        self.failure.as_ref()
+    }
+
+    /// Physics steps since the last reset.
+    pub fn physics_steps(&self) -> u64 {
+        self.physics_steps
+    }
+
+    /// Simulated seconds since the last reset.
+    pub fn time(&self) -> f64 {
+        self.physics_steps as f64 * self.cfg.dt
+    }
+
+    /// Runs one physics step; returns false (and records the failure) when the physics
+    /// broke. Does nothing once a failure is recorded.
+    pub fn step_physics(&mut self) -> bool {
+        if self.failure.is_some() {
+            return false;
+        }
+        let gravity = Vector::new(0.0, 0.0, self.cfg.gravity as f32);
+        let stepped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            self.pipeline.step(
+                gravity,
+                &self.params,
+                &mut self.islands,
+                &mut self.broad_phase,
+                &mut self.narrow_phase,
+                &mut self.sets.bodies,
+                &mut self.sets.colliders,
+                &mut self.sets.impulse_joints,
+                &mut self.sets.multibody_joints,
+                &mut self.soft,
+                &mut self.ccd,
+                &(),
+                &(),
+            );
+        }));
+        self.physics_steps += 1;
+        self.failure = if stepped.is_err() {
+            Some(PhysicsFailure::Panic)
+        } else {
+            self.check_physics()
+        };
+        self.failure.is_none()
+    }
+
+    fn check_physics(&self) -> Option<PhysicsFailure> {
+        if !self.pipeline.quarantine().is_empty() {
+            return Some(PhysicsFailure::NonFinite);
+        }
+        let f = &self.cfg.failure;
+        for h in self
+            .hand_bodies
+            .iter()
+            .chain(std::iter::once(&self.object_body))
+        {
+            let Some(rb) = self.sets.bodies.get(*h) else {
+                continue;
+            };
+            let t = rb.translation();
+            let v = rb.linvel();
+            if !(t.is_finite() && v.is_finite() && rb.angvel().is_finite()) {
+                return Some(PhysicsFailure::NonFinite);
+            }
+            let speed = v.length() as f64;
+            if speed > f.max_speed {
+                return Some(PhysicsFailure::TooFast { speed });
+            }
+        }
+        let p = self.object_position();
+        let distance = (p - self.object_start).norm();
+        if distance > f.max_object_travel {
+            return Some(PhysicsFailure::ObjectLost { distance });
+        }
+        for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
+            if let Some((_, c)) = pair.find_deepest_contact() {
+                let depth = -(c.dist as f64);
+                if depth > f.max_penetration {
+                    return Some(PhysicsFailure::DeepPenetration { depth });
+                }
+            }
+        }
+        None
+    }
+
+    /// Runs one control period (`control_period / dt` physics steps) with the current
+    /// targets; returns false when the physics broke (see [`HandSim::failure`]).
+    pub fn step_control(&mut self) -> bool {
+        for _ in 0..self.cfg.steps_per_control() {
+            if !self.step_physics() {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The object's centre (m).
+    pub fn object_position(&self) -> Vector3<f64> {
+        self.sets
+            .bodies
+            .get(self.object_body)
+            .map(|rb| {
+                let t = rb.translation();
+                Vector3::new(t.x as f64, t.y as f64, t.z as f64)
+            })
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// The object's pose: position (m) and unit quaternion (x, y, z, w), as f32 bits of
+    /// the physics state (for exact comparisons).
+    pub fn object_pose_raw(&self) -> [f32; 7] {
+        self.sets
+            .bodies
+            .get(self.object_body)
+            .map(|rb| {
+                let p = rb.position();
+                [
+                    p.translation.x,
+                    p.translation.y,
+                    p.translation.z,
+                    p.rotation.x,
+                    p.rotation.y,
+                    p.rotation.z,
+                    p.rotation.w,
+                ]
+            })
+            .unwrap_or([f32::NAN; 7])
+    }
+
+    /// Height of the object's lowest point above the table top (m).
+    pub fn object_lowest_z(&self) -> f64 {
+        self.sets
+            .colliders
+            .get(self.object_collider)
+            .map(|c| c.compute_aabb().mins.z as f64)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// The lift coordinate (m above its start).
+    pub fn lift_position(&self) -> f64 {
+        self.multibody()
+            .and_then(|mb| mb.link(self.lift_link))
+            .map(|l| l.joint().coords()[0] as f64)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// World pose of the body carrying URDF link `link` (test helper).
+    #[cfg(test)]
+    fn link_body_pose(&self, link: usize) -> Option<Isometry3<f64>> {
+        let mb = self.multibody()?;
+        let hj = self
+            .robot
+            .joints
+            .iter()
+            .position(|j| j.child == link)
+            .and_then(|ji| self.robot.hand.joints.iter().position(|&x| x == ji))?;
+        let l = mb.link(self.joints[hj].link)?;
+        let p = self.sets.bodies.get(l.rigid_body_handle())?.position();
+        let t = nalgebra::Translation3::new(
+            p.translation.x as f64,
+            p.translation.y as f64,
+            p.translation.z as f64,
+        );
+        let r = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            p.rotation.w as f64,
+            p.rotation.x as f64,
+            p.rotation.y as f64,
+            p.rotation.z as f64,
+        ));
+        Some(Isometry3::from_parts(t, r))
+    }
+
+    fn multibody(&self) -> Option<&Multibody> {
+        let link = self.sets.multibody_joints.rigid_body_link(self.mb_root)?;
+        self.sets.multibody_joints.get_multibody(link.multibody)
+    }
+
+    /// Joint angles (rad) and velocities (rad/s) of the 24 hand joints, paper order.
+    pub fn joint_state(&self) -> ([f64; 24], [f64; 24]) {
+        let mut q = [0.0; 24];
+        let mut qd = [0.0; 24];
+        if let Some(mb) = self.multibody() {
+            for (n, hj) in self.joints.iter().enumerate() {
+                if let Some(l) = mb.link(hj.link) {
+                    q[n] = l.joint().coords()[3] as f64;
+                    qd[n] = mb.joint_velocity(l)[0] as f64;
+                }
+            }
+        }
+        (q, qd)
+    }
+
+    /// Normal force (N) between the object and each distal phalanx (FF, MF, RF, LF, TH):
+    /// the summed contact impulses of the last step divided by the step.
+    pub fn tip_forces(&self) -> [f64; 5] {
+        std::array::from_fn(|f| {
+            self.distal_colliders[f]
+                .iter()
+                .map(|c| self.pair_force(*c, self.object_collider))
+                .sum()
+        })
+    }
+
+    /// Normal force (N) between two colliders: summed contact impulses / dt.
+    fn pair_force(&self, c1: ColliderHandle, c2: ColliderHandle) -> f64 {
+        self.narrow_phase
+            .contact_pair(c1, c2)
+            .map_or(0.0, |p| p.total_impulse_magnitude() as f64)
+            / self.cfg.dt
+    }
+
+    /// Normal force (N) between the object and the table top.
+    pub fn table_object_force(&self) -> f64 {
+        self.pair_force(self.table, self.object_collider)
+    }
+
+    /// Total normal force (N) between the object and any hand collider.
+    pub fn hand_object_force(&self) -> f64 {
+        self.hand_colliders
+            .iter()
+            .map(|c| self.pair_force(*c, self.object_collider))
+            .sum()
+    }
+
+    /// The 24 joint efforts (N m) the motors apply and report: the PD law clamped to the
+    /// effort limit.
+    pub fn joint_efforts(&self) -> [f64; 24] {
+        let (q, qd) = self.joint_state();
+        std::array::from_fn(|n| {
+            let hj = &self.joints[n];
+            pd_effort(hj.kp, hj.kd, self.targets[n], q[n], qd[n], hj.effort)
+        })
+    }
+
+    /// All sensor readings now.
+    pub fn sensors(&self) -> Sensors {
+        let (q, qdot) = self.joint_state();
+        let e24 = self.joint_efforts();
+        let tip_force = self.tip_forces();
+        let th = self.cfg.sensors.tactile_threshold;
+        let tactile = tip_force.map(|f| u8::from(f > th));
+        let effort = actuator_efforts(&e24);
+        let scale = self.cfg.sensors.torque_scale;
+        let torque_level =
+            effort.map(|e| torque_level(e * scale, &self.cfg.sensors.torque_thresholds));
+        Sensors {
+            tactile,
+            tip_force,
+            effort,
+            torque_level,
+            q,
+            qdot,
+        }
+    }
+
+    /// Raises the hand by `lift.height` over `lift.ramp_time` with a smooth (cubic) profile,
+    /// finger targets held, holds `lift.hold_time`, and judges: success when the object's
+    /// lowest point is at least `lift.success_height` above the table AND it touches the
+    /// hand.
+    pub fn lift_and_judge(&mut self) -> LiftOutcome {
+        let l = self.cfg.lift;
+        let ramp = (l.ramp_time / self.cfg.dt).round().max(1.0) as usize;
+        let hold = (l.hold_time / self.cfg.dt).round() as usize;
+        for k in 0..ramp + hold {
+            if self.failure.is_some() {
+                break;
+            }
+            let s = ((k + 1) as f64 / ramp as f64).min(1.0);
+            self.lift_target = l.height * s * s * (3.0 - 2.0 * s);
+            self.apply_targets();
+            self.step_physics();
+        }
+        let lowest = self.object_lowest_z();
+        let in_contact = self.hand_object_force() > 0.0;
+        let failure = self.failure.clone();
+        LiftOutcome {
+            success: failure.is_none() && lowest >= l.success_height && in_contact,
+            object_lowest_z: lowest,
+            in_contact,
+            failure,
+        }
+    }
+}
+
+/// Efforts of the 20 actuators from the 24 joint efforts: coupled J0 = J2 + J1.
+pub fn actuator_efforts(e: &[f64; 24]) -> [f64; 20] {
+    let mut out = [0.0; 20];
+    let mut i = 0;
+    let mut a = 0;
+    while i < 24 {
+        let name = HAND_JOINTS[i];
+        if COUPLED_FINGERS.contains(&&name[..2]) && name.ends_with("J2") {
+            out[a] = e[i] + e[i + 1];
+            i += 2;
+        } else {
+            out[a] = e[i];
+            i += 1;
+        }
+        a += 1;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::{Posture, Side};
+
+    fn assert_send<T: Send>() {}
+
+    #[test]
+    fn sim_is_send() {
+        assert_send::<HandSim>();
+    }
+
+    #[test]
+    fn coupled_efforts_are_summed() {
+        let mut e = [0.0; 24];
+        for (k, v) in e.iter_mut().enumerate() {
+            *v = k as f64;
+        }
+        let a = actuator_efforts(&e);
+        // WRJ2, WRJ1, FFJ4, FFJ3, FFJ0 = FFJ2 + FFJ1 = 4 + 5.
+        assert_eq!(&a[..5], &[0.0, 1.0, 2.0, 3.0, 9.0]);
+        // LFJ5, LFJ4, LFJ3, LFJ0 = 17 + 18, then the thumb 19..23.
+        assert_eq!(
+            &a[11..],
+            &[14.0, 15.0, 16.0, 35.0, 19.0, 20.0, 21.0, 22.0, 23.0]
+        );
+    }
+
+    #[test]
+    fn contact_force_of_a_resting_object_is_its_weight() {
+        // The force calibration behind the tactile threshold: impulse / dt = m g.
+        let robot = Robot::builtin(Side::Left);
+        let obj = ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.8);
+        let mut sim = HandSim::new(&robot, obj, SimConfig::default()).unwrap();
+        // Hand far above the object.
+        sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.3, 0.0))
+            .unwrap();
+        for _ in 0..60 {
+            assert!(sim.step_physics());
+        }
+        let f = sim.pair_force(sim.table, sim.object_collider);
+        assert!((f - 0.5 * 9.81).abs() < 0.05 * 4.905, "table force {f}");
+        assert_eq!(sim.hand_object_force(), 0.0);
+    }
+
+    #[test]
+    fn reset_writes_the_start_posture_and_placement() {
+        let robot = Robot::builtin(Side::Left);
+        let obj = ObjectSpec::default_box();
+        let mut sim = HandSim::new(&robot, obj, SimConfig::default()).unwrap();
+        let start = Posture::CShape.angles();
+        let scene = Scene::above(&obj, start, 0.05, 0.4);
+        sim.reset(&scene).unwrap();
+        let (q, qd) = sim.joint_state();
+        for k in 0..24 {
+            assert!(
+                (q[k] - start[k]).abs() < 1e-6,
+                "{k}: {} vs {}",
+                q[k],
+                start[k]
+            );
+            assert_eq!(qd[k], 0.0);
+        }
+        // The TH/LF tip midpoint of the simulated bodies is at the grasp point.
+        let tip = |f: usize| {
+            let ji = robot.hand.distal[f];
+            let mut full = robot.zero_q();
+            robot.set_hand_q(&mut full, &start);
+            let poses = robot.fk(&full);
+            let off = poses[ji].inverse() * poses[robot.hand.tips[f]];
+            (ji, off)
+        };
+        let mut mid = Vector3::zeros();
+        for f in [3, 4] {
+            let (link, off) = tip(f);
+            let body = sim.link_body_pose(link).unwrap();
+            mid += (body * off).translation.vector / 2.0;
+        }
+        let g = Vector3::from(scene.grasp_point);
+        assert!((mid - g).norm() < 1e-4, "{mid} vs {g}");
+        assert_eq!(sim.lift_position(), 0.0);
+        assert!((sim.object_position().z - 0.04).abs() < 1e-6);
+    }
+
+    #[test]
+    fn nan_target_is_rejected_and_changes_nothing() {
+        let robot = Robot::builtin(Side::Left);
+        let mut sim =
+            HandSim::new(&robot, ObjectSpec::default_box(), SimConfig::default()).unwrap();
+        let before = sim.targets();
+        let mut t = before;
+        t[5] = f64::NAN;
+        let e = sim.set_targets(&t).unwrap_err().to_string();
+        assert!(e.contains("FFJ1"), "{e}");
+        assert_eq!(sim.targets(), before);
+    }
+
+    #[test]
+    fn targets_are_clamped_and_coupled() {
+        let robot = Robot::builtin(Side::Left);
+        let mut sim =
+            HandSim::new(&robot, ObjectSpec::default_box(), SimConfig::default()).unwrap();
+        let mut t = [0.0; 24];
+        t[3] = 5.0; // FFJ3 above its limit 1.5708
+        t[4] = 1.0; // FFJ2
+        t[5] = 0.2; // FFJ1 -> both 0.6
+        sim.set_targets(&t).unwrap();
+        let got = sim.targets();
+        assert_eq!(got[3], robot.hand_limits()[3].1);
+        assert!((got[4] - 0.6).abs() < 1e-12 && (got[5] - 0.6).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,103 @@
+//! End-to-end tests of `grasp sim` and `grasp bench sim`.
+
+use std::process::Command;
+
+fn grasp(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .args(args)
+        .output()
+        .expect("run grasp");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn sim_closes_lifts_and_reports_success() {
+    let (ok, out, err) = grasp(&["sim", "--close", "--lift"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("lift: SUCCESS"), "{out}");
+    assert!(out.contains("tactile FMRLT"), "{out}");
+    assert!(out.contains("816 physics steps"), "{out}");
+}
+
+#[test]
+fn sim_json_has_steps_sensors_and_outcome() {
+    let (ok, out, err) = grasp(&[
+        "sim",
+        "--object",
+        "box",
+        "--friction",
+        "0.05",
+        "--close",
+        "--lift",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["lift"]["success"], false, "{out}");
+    let steps = v["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 7);
+    assert_eq!(steps[0]["sensors"]["tactile"].as_array().unwrap().len(), 5);
+    assert_eq!(
+        steps[0]["sensors"]["torque_level"]
+            .as_array()
+            .unwrap()
+            .len(),
+        20
+    );
+    assert_eq!(v["physics_steps"], 816);
+}
+
+#[test]
+fn sim_without_close_does_not_lift_the_object() {
+    let (ok, out, err) = grasp(&["sim", "--lift", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["lift"]["success"], false);
+}
+
+#[test]
+fn sim_rejects_bad_inputs_with_clear_errors() {
+    let (ok, _, err) = grasp(&["sim", "--friction", "1.5"]);
+    assert!(!ok);
+    assert!(err.contains("friction"), "{err}");
+    let (ok, _, err) = grasp(&["sim", "--mass", "NaN"]);
+    assert!(!ok);
+    assert!(err.contains("mass"), "{err}");
+    let (ok, _, err) = grasp(&["sim", "--config", "/nonexistent/sim.toml"]);
+    assert!(!ok);
+    assert!(err.contains("/nonexistent/sim.toml"), "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bad.toml");
+    let text = grasp::sim::config::DEFAULT_SIM_TOML.replace("hand = 1.0", "hand = 1.3");
+    std::fs::write(&p, text).unwrap();
+    let (ok, _, err) = grasp(&["sim", "--config", p.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(err.contains("friction.hand"), "{err}");
+}
+
+#[test]
+fn bench_sim_reports_throughput() {
+    let (ok, out, err) = grasp(&[
+        "bench",
+        "sim",
+        "--envs",
+        "2",
+        "--threads",
+        "2",
+        "--seconds",
+        "0.2",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["parallel"]["envs"], 2);
+    assert!(v["single"]["physics_steps"].as_u64().unwrap() > 0);
+    assert!(v["parallel"]["sim_seconds_per_s"].as_f64().unwrap() > 0.0);
+    let (ok, _, err) = grasp(&["bench", "sim", "--envs", "0"]);
+    assert!(!ok);
+    assert!(err.contains("envs"), "{err}");
+}
