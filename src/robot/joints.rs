@@ -281,7 +281,7 @@ pub fn right_hand_facts() -> Vec<JointFact> {
             30.0,
         ),
     ];
-    let mut push_finger = |facts: [JointFact; 5], parent: &'static str| {
+    let push_finger = |v: &mut Vec<JointFact>, facts: [JointFact; 5], parent: &'static str| {
         for mut f in facts {
             if f.parent == "knuckle_parent" {
                 f.parent = parent;
@@ -289,9 +289,9 @@ pub fn right_hand_facts() -> Vec<JointFact> {
             v.push(f);
         }
     };
-    push_finger(finger!("FF", "ff", [0.033, 0.0, 0.095], [0.0, -1.0, 0.0]), "palm");
-    push_finger(finger!("MF", "mf", [0.011, 0.0, 0.099], [0.0, -1.0, 0.0]), "palm");
-    push_finger(finger!("RF", "rf", [-0.011, 0.0, 0.095], [0.0, 1.0, 0.0]), "palm");
+    push_finger(&mut v, finger!("FF", "ff", [0.033, 0.0, 0.095], [0.0, -1.0, 0.0]), "palm");
+    push_finger(&mut v, finger!("MF", "mf", [0.011, 0.0, 0.099], [0.0, -1.0, 0.0]), "palm");
+    push_finger(&mut v, finger!("RF", "rf", [-0.011, 0.0, 0.095], [0.0, 1.0, 0.0]), "palm");
     let lf5 = rev(
         "LFJ5",
         "palm",
@@ -305,6 +305,7 @@ pub fn right_hand_facts() -> Vec<JointFact> {
     );
     v.push(lf5);
     push_finger(
+        &mut v,
         finger!("LF", "lf", [0.0, 0.0, 0.06579], [0.0, 1.0, 0.0]),
         "lfmetacarpal",
     );
