@@ -3,6 +3,8 @@
 
 use clap::{Args, Parser, Subcommand};
 
+mod objects;
+
 /// Flags shared by every subcommand.
 #[derive(Debug, Clone, Args)]
 pub struct Global {
@@ -34,6 +36,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// List, inspect and export the objects to grasp.
+    Objects(objects::ObjectsArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -58,6 +62,8 @@ pub fn init_logging(g: &Global) {
 
 /// Runs the chosen subcommand.
 pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
-    let _global = cli.global;
-    match cli.command {}
+    let global = cli.global;
+    match cli.command {
+        Command::Objects(a) => objects::run(a, &global),
+    }
 }

@@ -196,7 +196,7 @@ pub fn decompose(
         name: label.to_string(),
         message: "VHACD failed on this mesh".into(),
     })?;
-    let mut hulls: Vec<ConvexHull> = raw
+    let hulls: Vec<ConvexHull> = raw
         .into_iter()
         .filter_map(|(pts, _)| {
             let p: Vec<[f64; 3]> = pts
@@ -206,6 +206,8 @@ pub fn decompose(
             ConvexHull::from_points(&p)
         })
         .collect();
+    let hulls = merge_hulls(hulls, params.max_hulls.max(1) as usize);
+    let mut hulls = hulls;
     if hulls.is_empty() {
         tracing::warn!("{label}: VHACD gave no usable hull; using the mesh's convex hull");
         hulls.push(ConvexHull::from_points(&mesh.vertices).ok_or_else(|| {
@@ -216,6 +218,67 @@ pub fn decompose(
         })?);
     }
     Ok(hulls)
+}
+
+/// Merges hulls pairwise until at most `max` remain. parry's VHACD splits to a depth that
+/// can yield up to twice the requested count and has no merge step, so this greedy pass
+/// (as in the original V-HACD) repeatedly merges the pair whose merged hull adds the
+/// least volume beyond the two hulls' volumes. Ties go to the lowest indices, so the
+/// result is deterministic.
+pub fn merge_hulls(mut hulls: Vec<ConvexHull>, max: usize) -> Vec<ConvexHull> {
+    let volume = |h: &ConvexHull| h.mesh().map_or(0.0, |m| m.signed_volume());
+    let union = |a: &ConvexHull, b: &ConvexHull| {
+        let pts: Vec<[f64; 3]> = a.points.iter().chain(&b.points).copied().collect();
+        ConvexHull::from_points(&pts)
+    };
+    let mut vols: Vec<f64> = hulls.iter().map(volume).collect();
+    // cost[i][j] for i < j: added volume of merging i and j.
+    let pair_cost = |hulls: &[ConvexHull], vols: &[f64], i: usize, j: usize| {
+        union(&hulls[i], &hulls[j]).map_or(f64::INFINITY, |u| volume(&u) - vols[i] - vols[j])
+    };
+    let n = hulls.len();
+    let mut cost: Vec<Vec<f64>> = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    if j > i {
+                        pair_cost(&hulls, &vols, i, j)
+                    } else {
+                        f64::INFINITY
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    while hulls.len() > max.max(1) {
+        let mut best = (f64::INFINITY, 0, 1);
+        for (i, row) in cost.iter().enumerate() {
+            for (j, &c) in row.iter().enumerate().skip(i + 1) {
+                if c < best.0 {
+                    best = (c, i, j);
+                }
+            }
+        }
+        let (_, i, j) = best;
+        let Some(merged) = union(&hulls[i], &hulls[j]) else {
+            break;
+        };
+        hulls[i] = merged;
+        vols[i] = volume(&hulls[i]);
+        hulls.remove(j);
+        vols.remove(j);
+        cost.remove(j);
+        for row in &mut cost {
+            row.remove(j);
+        }
+        for k in 0..hulls.len() {
+            if k != i {
+                let (a, b) = (k.min(i), k.max(i));
+                cost[a][b] = pair_cost(&hulls, &vols, a, b);
+            }
+        }
+    }
+    hulls
 }
 
 /// [`decompose`] through the cache file `cache_file` (see the module docs).
@@ -268,6 +331,12 @@ pub fn decompose_cached(
             if let Err(e) = write_atomic(cache_file, &bytes) {
                 tracing::warn!("{label}: hull cache not saved: {e}");
             }
+            // Return exactly what a later cache hit will read (serde_json's float parsing
+            // may differ from the computed value in the last bit), so the first run and
+            // every later run simulate the same geometry.
+            if let Ok(back) = serde_json::from_slice::<CacheFile>(&bytes) {
+                return Ok((back.hulls, status));
+            }
         }
         Err(e) => tracing::warn!("{label}: hull cache not serialised: {e}"),
     }
@@ -292,6 +361,27 @@ mod tests {
         let mut h = Fnv128::new();
         h.write(b"a");
         assert_eq!(h.finish(), 0xd228cb696f1a8caf78912b704e4a8964);
+    }
+
+    #[test]
+    fn merging_joins_the_cheapest_pair_first() {
+        let cube = |x: f64| {
+            ConvexHull::from_points(&crate::objects::procedural::box_points(
+                [x, 0.0, 0.0],
+                [0.5, 0.5, 0.5],
+            ))
+            .unwrap()
+        };
+        // Two touching unit cubes and one far away: the touching pair merges at no cost.
+        let merged = merge_hulls(vec![cube(0.0), cube(10.0), cube(1.0)], 2);
+        assert_eq!(merged.len(), 2);
+        let v = merged[0].mesh().unwrap().signed_volume();
+        assert!((v - 2.0).abs() < 1e-5, "{v}");
+        assert_eq!(merge_hulls(vec![cube(0.0), cube(3.0)], 5).len(), 2);
+        assert_eq!(
+            merge_hulls(vec![cube(0.0), cube(3.0), cube(7.0)], 1).len(),
+            1
+        );
     }
 
     #[test]

@@ -75,9 +75,9 @@ impl Aabb {
             max: first,
         };
         for p in it {
-            for k in 0..3 {
-                bb.min[k] = bb.min[k].min(p[k]);
-                bb.max[k] = bb.max[k].max(p[k]);
+            for ((lo, hi), &x) in bb.min.iter_mut().zip(bb.max.iter_mut()).zip(p) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
             }
         }
         Some(bb)
@@ -143,16 +143,23 @@ impl TriMesh {
             .extension()
             .and_then(|e| e.to_str())
             .map(|e| e.to_ascii_lowercase());
-        let bytes = std::fs::read(path).map_err(|source| ObjectError::Io {
+        let is_obj = match ext.as_deref() {
+            Some("obj") => true,
+            Some("stl") => false,
+            _ => {
+                return Err(ObjectError::UnsupportedFormat {
+                    path: path.display().to_string(),
+                })
+            }
+        };
+        let bytes = std::fs::read(path).map_err(|error| ObjectError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         })?;
-        match ext.as_deref() {
-            Some("obj") => Self::from_obj_bytes(path, &bytes),
-            Some("stl") => Self::from_stl_bytes(path, &bytes),
-            _ => Err(ObjectError::UnsupportedFormat {
-                path: path.display().to_string(),
-            }),
+        if is_obj {
+            Self::from_obj_bytes(path, &bytes)
+        } else {
+            Self::from_stl_bytes(path, &bytes)
         }
     }
 
@@ -698,5 +705,84 @@ mod tests {
         assert_eq!(a.content_hash(), b.content_hash());
         b.vertices[0][0] = 1e-9;
         assert_ne!(a.content_hash(), b.content_hash());
+    }
+
+    fn fixture(name: &str) -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/objects")
+            .join(name)
+    }
+
+    #[test]
+    fn loads_obj_and_ascii_stl_fixtures() {
+        for f in ["cube.obj", "cube_ascii.stl"] {
+            let m = TriMesh::load(&fixture(f)).unwrap();
+            m.validate(f).unwrap();
+            assert_eq!((m.vertices.len(), m.triangles.len()), (8, 12), "{f}");
+            assert_relative_eq!(m.signed_volume(), 0.05f64.powi(3), epsilon = 1e-9);
+            m.check_size(f).unwrap();
+        }
+    }
+
+    #[test]
+    fn loads_binary_stl() {
+        let cube = unit_cube();
+        let tris: Vec<stl_io::Triangle> = cube
+            .triangles
+            .iter()
+            .map(|t| stl_io::Triangle {
+                normal: stl_io::Normal::new([0.0, 0.0, 0.0]),
+                vertices: t.map(|i| {
+                    let v = cube.vertices[i as usize];
+                    stl_io::Vertex::new([v[0] as f32 * 0.1, v[1] as f32 * 0.1, v[2] as f32 * 0.1])
+                }),
+            })
+            .collect();
+        let mut bytes = Vec::new();
+        stl_io::write_stl(&mut bytes, tris.iter()).unwrap();
+        assert_eq!(bytes.len(), 84 + 50 * 12);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cube_binary.STL");
+        std::fs::write(&path, &bytes).unwrap();
+        let m = TriMesh::load(&path).unwrap();
+        m.validate("cube_binary.STL").unwrap();
+        assert_eq!(m.vertices.len(), 8);
+        assert_relative_eq!(m.signed_volume(), 0.001, epsilon = 1e-8);
+    }
+
+    #[test]
+    fn bad_fixtures_give_errors_naming_the_file() {
+        let check = |f: &str, want: &str| {
+            let path = fixture(f);
+            let e = TriMesh::load(&path)
+                .and_then(|m| {
+                    m.validate(&path.display().to_string())?;
+                    m.check_size(&path.display().to_string())
+                })
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(f) && e.contains(want), "{f}: {e}");
+        };
+        check("empty.obj", "empty");
+        check("nan.obj", "NaN");
+        check("open_box.obj", "not watertight");
+        check("huge.obj", "too large");
+        check("missing.obj", "cannot read");
+        let e = TriMesh::load(Path::new("x.ply")).unwrap_err().to_string();
+        assert!(e.contains("x.ply") && e.contains("unsupported"), "{e}");
+        let bad = TriMesh::from_stl_bytes(Path::new("bad.stl"), b"solid x\nfacet nonsense\n");
+        assert!(bad.unwrap_err().to_string().contains("bad.stl"));
+    }
+
+    #[test]
+    fn non_convex_fixture_is_valid() {
+        let m = TriMesh::load(&fixture("l_block.obj")).unwrap();
+        m.validate("l_block.obj").unwrap();
+        // 8x8 minus 5x5 cm, 4 cm high.
+        assert_relative_eq!(
+            m.signed_volume().abs(),
+            (0.0064 - 0.0025) * 0.04,
+            epsilon = 1e-9
+        );
     }
 }

@@ -44,21 +44,21 @@ use parry3d::shape::SharedShape;
 /// Errors of the object library. Every variant names the file or object concerned.
 #[derive(Debug, thiserror::Error)]
 pub enum ObjectError {
-    /// A file could not be read.
-    #[error("cannot read {path}: {source}")]
+    /// A file could not be read. (The I/O error is part of the message, not a separate
+    /// `source`, so `{:#}` chains do not print it twice.)
+    #[error("cannot read {path}: {error}")]
     Io {
         /// The file.
         path: String,
         /// The I/O error.
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A file could not be written.
-    #[error(transparent)]
-    Write(#[from] crate::util::fsx::WriteError),
-    /// A manifest could not be parsed.
-    #[error(transparent)]
-    Config(#[from] crate::util::config::ConfigError),
+    #[error("{0}")]
+    Write(crate::util::fsx::WriteError),
+    /// A manifest could not be read or parsed.
+    #[error("{0}")]
+    Config(crate::util::config::ConfigError),
     /// The mesh file extension is neither `.obj` nor `.stl`.
     #[error("unsupported mesh format {path}: expected a .obj or .stl file")]
     UnsupportedFormat {
@@ -198,6 +198,18 @@ pub enum ObjectError {
         /// What went wrong.
         message: String,
     },
+}
+
+impl From<crate::util::fsx::WriteError> for ObjectError {
+    fn from(e: crate::util::fsx::WriteError) -> Self {
+        ObjectError::Write(e)
+    }
+}
+
+impl From<crate::util::config::ConfigError> for ObjectError {
+    fn from(e: crate::util::config::ConfigError) -> Self {
+        ObjectError::Config(e)
+    }
 }
 
 /// A convex piece of an object's collision geometry: the vertices of a convex polyhedron

@@ -480,7 +480,10 @@ pub fn revolve(profile: &[[f64; 2]], segments: usize) -> Result<TriMesh, String>
     if profile[0][0] != 0.0 || profile[n - 1][0] != 0.0 {
         return Err("the profile must start and end on the axis".into());
     }
-    if profile[1..n - 1].iter().any(|q| !(q[0] > 0.0)) {
+    if profile[1..n - 1]
+        .iter()
+        .any(|q| !q[0].is_finite() || q[0] <= 0.0)
+    {
         return Err("the profile radius must be positive between its ends".into());
     }
     let mut v = vec![[0.0, 0.0, profile[0][1]]];
@@ -603,6 +606,9 @@ pub fn radial_mesh(level: u32, r: impl Fn([f64; 3]) -> f64) -> Result<TriMesh, S
     Ok(m)
 }
 
+/// The vertex rings of a swept tube, one point list per centre-line sample.
+pub type Rings = Vec<Vec<[f64; 3]>>;
+
 /// A tube swept along `centres` with radii `radii` and `sides` sides. The ring frames use
 /// `up` as reference normal, so the curve must never run parallel to `up`. An open tube
 /// is closed at each end by a cone whose apex lies `cap * radius` beyond the end; a
@@ -614,7 +620,7 @@ pub fn sweep(
     up: [f64; 3],
     closed: bool,
     cap: f64,
-) -> Result<(TriMesh, Vec<Vec<[f64; 3]>>), String> {
+) -> Result<(TriMesh, Rings), String> {
     let n = centres.len();
     if n < 2 || radii.len() != n || sides < 3 {
         return Err("a sweep needs 2 centres, one radius per centre and 3 sides".into());

@@ -332,7 +332,11 @@ pub fn build(rs: &ResolvedSpec, ctx: &BuildContext) -> Result<Object, ObjectErro
 
 /// Builds every spec (in parallel on the current rayon pool), keeping the order.
 pub fn build_all(specs: &[ResolvedSpec], ctx: &BuildContext) -> Result<Vec<Object>, ObjectError> {
-    specs.par_iter().map(|s| build(s, ctx)).collect()
+    // Collect every result first so the reported error is the first failing object in
+    // order, whatever the thread timing.
+    let results: Vec<Result<Object, ObjectError>> =
+        specs.par_iter().map(|s| build(s, ctx)).collect();
+    results.into_iter().collect()
 }
 
 /// Resolves an `--objects` argument and builds the objects.
@@ -795,6 +799,9 @@ pub fn suggest(name: &str) -> Vec<String> {
         .filter_map(|k| {
             let d = levenshtein(name, &k);
             let sub = name.len() >= 3 && (k.contains(name) || name.contains(&k));
+            // A misspelt prefix: `bottel` for `bottle_tall`.
+            let prefix: String = k.chars().take(name.chars().count()).collect();
+            let sub = sub || (name.len() >= 4 && levenshtein(name, &prefix) <= 2);
             (d <= lim || sub).then_some((if sub { d.min(lim) } else { d }, k))
         })
         .collect();
@@ -883,9 +890,9 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
     if path.is_dir() {
-        let entries = std::fs::read_dir(path).map_err(|source| ObjectError::Io {
+        let entries = std::fs::read_dir(path).map_err(|error| ObjectError::Io {
             path: src.clone(),
-            source,
+            error,
         })?;
         let mut files: Vec<PathBuf> = entries
             .filter_map(|e| e.ok().map(|e| e.path()))
@@ -935,7 +942,7 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
     if looks_like_path {
         return Err(ObjectError::Io {
             path: src,
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
+            error: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
         });
     }
     let all = builtin_set("all").unwrap_or_default();
@@ -1088,5 +1095,139 @@ mod tests {
         assert_eq!(levenshtein("kitten", "sitting"), 3);
         assert_eq!(levenshtein("", "abc"), 3);
         assert_eq!(levenshtein("mug", "mug"), 0);
+    }
+
+    #[test]
+    fn vhacd_cache_is_reused_and_rebuilt_when_stale_or_corrupt() {
+        use crate::objects::CacheStatus;
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = BuildContext::with_cache_dir(dir.path());
+        let spec = &resolve_specs("bottle_water").unwrap()[0];
+        let file = dir.path().join("hulls/bottle_water.hulls.json");
+        let a = build(spec, &ctx).unwrap();
+        assert_eq!(a.hull_source, HullSource::Vhacd(CacheStatus::Built));
+        assert!(file.is_file());
+        let b = build(spec, &ctx).unwrap();
+        assert_eq!(b.hull_source, HullSource::Vhacd(CacheStatus::Hit));
+        assert_eq!(a.hulls, b.hulls);
+        // Corrupt file: rebuilt, same result (VHACD is deterministic), file repaired.
+        std::fs::write(&file, b"{ this is not json").unwrap();
+        let c = build(spec, &ctx).unwrap();
+        assert_eq!(c.hull_source, HullSource::Vhacd(CacheStatus::Rebuilt));
+        assert_eq!(a.hulls, c.hulls);
+        assert_eq!(
+            build(spec, &ctx).unwrap().hull_source,
+            HullSource::Vhacd(CacheStatus::Hit)
+        );
+        // Stale file (other parameters): rebuilt.
+        let ctx2 = BuildContext {
+            decomp: DecompParams {
+                max_hulls: 4,
+                ..ctx.decomp
+            },
+            ..ctx.clone()
+        };
+        let d = build(spec, &ctx2).unwrap();
+        assert_eq!(d.hull_source, HullSource::Vhacd(CacheStatus::Rebuilt));
+        assert!(d.hulls.len() <= 4);
+    }
+
+    #[test]
+    fn vhacd_hulls_cover_the_object() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = BuildContext::with_cache_dir(dir.path());
+        for name in ["bottle_tall", "egad_c5_d2", "vase"] {
+            let o = build(&resolve_specs(name).unwrap()[0], &ctx).unwrap();
+            assert!(matches!(o.hull_source, HullSource::Vhacd(_)), "{name}");
+            assert!(o.hulls.len() <= ctx.decomp.max_hulls as usize, "{name}");
+            let hull_vol: f64 = o
+                .hulls
+                .iter()
+                .map(|h| h.mesh().unwrap().signed_volume())
+                .sum();
+            let ratio = hull_vol / o.volume_m3;
+            assert!(
+                (0.9..1.35).contains(&ratio),
+                "{name}: hull/mesh volume {ratio}"
+            );
+            let pts: Vec<[f64; 3]> = o.hulls.iter().flat_map(|h| h.points.clone()).collect();
+            let hb = crate::objects::Aabb::of_points(&pts).unwrap();
+            for k in 0..3 {
+                assert!((hb.min[k] - o.bbox.min[k]).abs() < 0.006, "{name} {hb:?}");
+                assert!((hb.max[k] - o.bbox.max[k]).abs() < 0.006, "{name} {hb:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn shared_shapes_match_the_object() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = BuildContext::with_cache_dir(dir.path());
+        for name in [
+            "cylinder_wood",
+            "capsule_pill",
+            "mug",
+            "egad_c0_d0",
+            "box_gelatin",
+        ] {
+            let o = build(&resolve_specs(name).unwrap()[0], &ctx).unwrap();
+            let shape = o.to_shared_shape().unwrap();
+            let aabb = shape.compute_local_aabb();
+            let (lo, hi) = (aabb.mins, aabb.maxs);
+            let got = [[lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]];
+            for k in 0..3 {
+                assert!(
+                    (got[0][k] as f64 - o.bbox.min[k]).abs() < 2e-3,
+                    "{name} {got:?} {:?}",
+                    o.bbox
+                );
+                assert!(
+                    (got[1][k] as f64 - o.bbox.max[k]).abs() < 2e-3,
+                    "{name} {got:?} {:?}",
+                    o.bbox
+                );
+            }
+            let d = o.collider_desc();
+            assert_eq!(d.hulls.len(), o.hulls.len());
+            assert_eq!(d.primitive.is_some(), o.primitive.is_some());
+            assert_eq!(d.mass_kg, o.mass_kg);
+        }
+    }
+
+    #[test]
+    fn user_mesh_folder_and_manifest() {
+        let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/objects");
+        let dir = tempfile::tempdir().unwrap();
+        for f in ["cube.obj", "cube_ascii.stl", "l_block.obj"] {
+            std::fs::copy(data.join(f), dir.path().join(f)).unwrap();
+        }
+        let ctx = BuildContext::with_cache_dir(dir.path().join("cache"));
+        let objs = load_objects(&dir.path().display().to_string(), &ctx).unwrap();
+        let names: Vec<&str> = objs.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["cube", "cube_ascii", "l_block"]);
+        let cube = &objs[0];
+        assert_relative_eq!(
+            cube.mass_kg,
+            0.05f64.powi(3) * super::super::spec::DEFAULT_DENSITY,
+            max_relative = 1e-6
+        );
+        assert_eq!(cube.hull_source, HullSource::Convex);
+        assert_relative_eq!(cube.com[2], 0.025, epsilon = 1e-9);
+        assert!(matches!(objs[2].hull_source, HullSource::Vhacd(_)));
+        assert!(dir.path().join("l_block.obj.hulls.json").is_file());
+
+        let manifest = dir.path().join("set.toml");
+        std::fs::write(
+            &manifest,
+            "[[object]]\nname = \"small\"\nshape = { type = \"mesh\", path = \"cube.obj\", scale = 0.5 }\nmass_kg = 0.2\nfriction = 0.3\n\
+             [[object]]\nname = \"b3\"\nshape = { type = \"procedural\", generator = \"bottle\", seed = 3 }\n",
+        )
+        .unwrap();
+        let objs = load_objects(&manifest.display().to_string(), &ctx).unwrap();
+        assert_eq!(objs.len(), 2);
+        assert_relative_eq!(objs[0].size()[0], 0.025, epsilon = 1e-9);
+        assert_eq!(objs[0].mass_kg, 0.2);
+        assert_eq!(objs[0].friction, 0.3);
+        assert_eq!(objs[1].kind, ObjectKind::User);
     }
 }
