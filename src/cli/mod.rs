@@ -4,6 +4,7 @@
 use clap::{Args, Parser, Subcommand};
 
 mod bench;
+mod objects;
 mod pca;
 mod robot;
 mod sim;
@@ -47,6 +48,8 @@ pub enum Command {
     Sim(sim::SimArgs),
     /// Measure throughput (`grasp bench sim`).
     Bench(bench::BenchArgs),
+    /// List, inspect and export the objects to grasp.
+    Objects(objects::ObjectsArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -77,5 +80,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Pca(a) => pca::run(a, &global),
         Command::Sim(a) => sim::run(a, &global),
         Command::Bench(a) => bench::run(a, &global),
+        Command::Objects(a) => objects::run(a, &global),
     }
 }

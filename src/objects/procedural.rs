@@ -1,0 +1,1499 @@
+//! Procedural shapes, deterministic from a seed ([`ChaCha8Rng`]), watertight by
+//! construction, in metres.
+//!
+//! Four constructions keep every mesh closed:
+//!
+//! - **surfaces of revolution** ([`revolve`]): a profile `(r, z)` that starts and ends on
+//!   the axis (`r = 0`), revolved into rings joined by quads and closed by two fans
+//!   (bottles, cans, bowls, vases...);
+//! - **radial meshes** ([`radial_mesh`]): a subdivided icosahedron whose vertices move along
+//!   their own direction to a positive radius `r(direction)`; the result is star-shaped
+//!   and cannot self-intersect (EGAD-like shapes, fruit, superquadrics);
+//! - **swept tubes** ([`sweep`]): rings along a curve, closed by cones or into a loop
+//!   (bananas, rings);
+//! - **assemblies of convex parts** ([`Assembly`]): each part is the convex hull of a few
+//!   points, a closed mesh of its own; the parts double as the collision hulls (mugs,
+//!   hammers, cameras...).
+//!
+//! Each generator ([`GENERATORS`]) declares its parameters with defaults and ranges; a
+//! spec may override any of them by name ([`generate`]). Unknown names, values outside the
+//! range and inconsistent combinations are errors naming the parameter.
+
+use super::mesh::TriMesh;
+use super::{convex_hull_mesh, ConvexHull, ObjectError};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::collections::{BTreeMap, HashMap};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+/// The output of a generator: the visual mesh (one or more closed components) and, for
+/// assemblies, the convex parts to use as collision hulls.
+#[derive(Debug, Clone)]
+pub struct Generated {
+    /// The visual mesh, outward oriented.
+    pub mesh: TriMesh,
+    /// Convex collision parts, when the generator knows them.
+    pub parts: Option<Vec<ConvexHull>>,
+}
+
+/// One generator parameter: name, default, inclusive range and meaning.
+#[derive(Debug, Clone, Copy)]
+pub struct ParamDef {
+    /// Parameter name as written in a spec's `params` table.
+    pub name: &'static str,
+    /// Value used when the spec does not set it.
+    pub default: f64,
+    /// Smallest allowed value.
+    pub min: f64,
+    /// Largest allowed value.
+    pub max: f64,
+    /// Meaning and unit.
+    pub doc: &'static str,
+}
+
+/// Resolved parameter values of one generator call.
+#[derive(Debug, Clone)]
+pub struct Params {
+    values: HashMap<&'static str, f64>,
+}
+
+impl Params {
+    /// The value of `name` (NaN, rejected later by mesh validation, if the generator did
+    /// not declare it).
+    pub fn get(&self, name: &str) -> f64 {
+        self.values.get(name).copied().unwrap_or(f64::NAN)
+    }
+}
+
+type BuildFn = fn(&mut ChaCha8Rng, &Params) -> Result<Generated, String>;
+
+/// A named generator with its parameters.
+#[derive(Clone, Copy)]
+pub struct GeneratorDef {
+    /// Name used in `generator = "..."`.
+    pub name: &'static str,
+    /// What it makes.
+    pub doc: &'static str,
+    /// Its parameters.
+    pub params: &'static [ParamDef],
+    build: BuildFn,
+}
+
+impl std::fmt::Debug for GeneratorDef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GeneratorDef")
+            .field("name", &self.name)
+            .finish()
+    }
+}
+
+const fn p(name: &'static str, default: f64, min: f64, max: f64, doc: &'static str) -> ParamDef {
+    ParamDef {
+        name,
+        default,
+        min,
+        max,
+        doc,
+    }
+}
+
+/// Every generator, by name.
+pub const GENERATORS: &[GeneratorDef] = &[
+    GeneratorDef {
+        name: "egad",
+        doc: "EGAD-like evolved shape: superquadric core, extra ellipsoid lobes and low-frequency noise growing with complexity; size and aspect ratio set by difficulty",
+        params: &[
+            p("complexity", 3.0, 0.0, 6.0, "shape complexity level: lobes = 1 + c/2, noise terms = c"),
+            p("difficulty", 2.0, 0.0, 4.0, "grasp difficulty level: smaller, more elongated and flatter"),
+            p("size", 1.0, 0.5, 1.5, "overall scale factor"),
+        ],
+        build: build_egad,
+    },
+    GeneratorDef {
+        name: "superquadric",
+        doc: "superellipsoid |x/rx|^e + |y/ry|^e + |z/rz|^e = 1 with optional bumps (fruit, soap, remote controls)",
+        params: &[
+            p("rx", 0.035, 0.005, 0.15, "semi-axis along x (m)"),
+            p("ry", 0.035, 0.005, 0.15, "semi-axis along y (m)"),
+            p("rz", 0.035, 0.005, 0.15, "semi-axis along z (m)"),
+            p("exponent", 2.0, 1.0, 10.0, "2 = ellipsoid, larger = boxier"),
+            p("bump", 0.0, 0.0, 0.3, "relative amplitude of the seeded surface bumps"),
+            p("bump_freq", 2.0, 1.0, 6.0, "spatial frequency of the bumps"),
+        ],
+        build: build_superquadric,
+    },
+    GeneratorDef {
+        name: "can",
+        doc: "closed cylinder with bevelled edges (tin cans, soda cans); convex",
+        params: &[
+            p("radius", 0.033, 0.01, 0.08, "radius (m)"),
+            p("height", 0.1, 0.01, 0.3, "height (m)"),
+            p("bevel", 0.003, 0.0, 0.01, "edge bevel (m)"),
+        ],
+        build: build_can,
+    },
+    GeneratorDef {
+        name: "bottle",
+        doc: "bottle or jar: body (optionally waisted), rounded shoulder, neck and lip",
+        params: &[
+            p("radius", 0.035, 0.01, 0.08, "body radius (m)"),
+            p("height", 0.22, 0.04, 0.3, "total height (m)"),
+            p("neck_radius", 0.013, 0.004, 0.075, "neck radius (m)"),
+            p("neck_height", 0.05, 0.005, 0.15, "neck length (m)"),
+            p("shoulder", 0.04, 0.003, 0.15, "height of the shoulder transition (m)"),
+            p("waist", 0.0, 0.0, 0.3, "relative inward waist in the middle of the body"),
+        ],
+        build: build_bottle,
+    },
+    GeneratorDef {
+        name: "vessel",
+        doc: "thick-walled open vessel (bowls, cups); collision from convex wall sectors",
+        params: &[
+            p("radius_top", 0.055, 0.02, 0.08, "outer rim radius (m)"),
+            p("radius_bottom", 0.035, 0.01, 0.08, "outer base radius (m)"),
+            p("height", 0.06, 0.02, 0.2, "height (m)"),
+            p("wall", 0.005, 0.002, 0.02, "wall and floor thickness (m)"),
+            p("curve", 1.0, 0.0, 1.0, "0 = straight tapered wall, 1 = rounded bowl"),
+        ],
+        build: build_vessel,
+    },
+    GeneratorDef {
+        name: "mug",
+        doc: "mug: straight vessel plus a D-shaped handle, all convex parts",
+        params: &[
+            p("radius", 0.04, 0.02, 0.06, "outer radius (m)"),
+            p("height", 0.09, 0.04, 0.15, "height (m)"),
+            p("wall", 0.005, 0.002, 0.01, "wall thickness (m)"),
+            p("handle_reach", 0.028, 0.015, 0.05, "how far the handle sticks out (m)"),
+            p("handle_thickness", 0.008, 0.004, 0.015, "handle tube radius (m)"),
+        ],
+        build: build_mug,
+    },
+    GeneratorDef {
+        name: "banana",
+        doc: "curved tapered tube lying on the table, closed by cones; convex segments",
+        params: &[
+            p("length", 0.18, 0.08, 0.25, "chord length (m)"),
+            p("radius", 0.018, 0.008, 0.03, "largest tube radius (m)"),
+            p("bend", 0.9, 0.2, 1.6, "bend angle of the centre line (rad)"),
+        ],
+        build: build_banana,
+    },
+    GeneratorDef {
+        name: "hammer",
+        doc: "tool lying on its side: cylindrical handle plus a box head",
+        params: &[
+            p("handle_length", 0.2, 0.08, 0.26, "handle length (m)"),
+            p("handle_radius", 0.012, 0.006, 0.02, "handle radius (m)"),
+            p("head_length", 0.1, 0.04, 0.14, "head length across the handle (m)"),
+            p("head_size", 0.025, 0.012, 0.04, "head cross-section side (m)"),
+            p("flat", 0.0, 0.0, 1.0, "1 = flat blade head (spatula-like) instead of a block"),
+        ],
+        build: build_hammer,
+    },
+    GeneratorDef {
+        name: "vase",
+        doc: "solid vase: wavy surface of revolution narrowing to a neck",
+        params: &[
+            p("radius", 0.04, 0.015, 0.06, "base body radius (m)"),
+            p("height", 0.18, 0.05, 0.3, "height (m)"),
+            p("waves", 1.5, 0.5, 4.0, "number of bulges along the height"),
+            p("amplitude", 0.2, 0.0, 0.4, "relative bulge amplitude"),
+            p("neck", 0.6, 0.3, 1.0, "top radius relative to the base"),
+        ],
+        build: build_vase,
+    },
+    GeneratorDef {
+        name: "camera",
+        doc: "box body with a cylindrical lens and a viewfinder bump",
+        params: &[
+            p("width", 0.11, 0.04, 0.15, "body width along x (m)"),
+            p("depth", 0.045, 0.02, 0.08, "body depth along y (m)"),
+            p("height", 0.07, 0.03, 0.12, "body height (m)"),
+            p("lens_radius", 0.025, 0.01, 0.04, "lens radius (m)"),
+            p("lens_length", 0.035, 0.01, 0.07, "lens length (m)"),
+        ],
+        build: build_camera,
+    },
+    GeneratorDef {
+        name: "teapot",
+        doc: "round body, lid knob, spout and handle, all convex parts",
+        params: &[
+            p("radius", 0.055, 0.03, 0.07, "body radius (m)"),
+            p("height", 0.09, 0.05, 0.14, "body height (m)"),
+        ],
+        build: build_teapot,
+    },
+    GeneratorDef {
+        name: "flashlight",
+        doc: "standing cylinder with a wider head (torch, spray can)",
+        params: &[
+            p("radius", 0.016, 0.008, 0.04, "handle radius (m)"),
+            p("length", 0.2, 0.06, 0.3, "total length (m)"),
+            p("head_radius", 0.026, 0.01, 0.06, "head radius (m)"),
+            p("head_length", 0.05, 0.01, 0.1, "head length (m)"),
+        ],
+        build: build_flashlight,
+    },
+    GeneratorDef {
+        name: "prism",
+        doc: "regular polygonal prism standing on a face; convex",
+        params: &[
+            p("sides", 6.0, 3.0, 12.0, "number of sides (rounded)"),
+            p("radius", 0.035, 0.01, 0.07, "circumradius (m)"),
+            p("height", 0.08, 0.01, 0.25, "height (m)"),
+        ],
+        build: build_prism,
+    },
+    GeneratorDef {
+        name: "star",
+        doc: "extruded star: polygon core plus triangular spikes (convex parts)",
+        params: &[
+            p("points", 5.0, 3.0, 8.0, "number of spikes (rounded)"),
+            p("outer", 0.05, 0.02, 0.07, "spike tip radius (m)"),
+            p("inner", 0.022, 0.008, 0.05, "inner radius (m)"),
+            p("height", 0.035, 0.01, 0.1, "thickness (m)"),
+        ],
+        build: build_star,
+    },
+    GeneratorDef {
+        name: "torus",
+        doc: "ring lying flat; convex ring segments",
+        params: &[
+            p("major", 0.045, 0.02, 0.06, "radius of the centre circle (m)"),
+            p("minor", 0.014, 0.005, 0.03, "tube radius (m)"),
+        ],
+        build: build_torus,
+    },
+    GeneratorDef {
+        name: "egg",
+        doc: "egg lying on its side; convex",
+        params: &[
+            p("radius", 0.024, 0.01, 0.05, "largest radius (m)"),
+            p("length", 0.065, 0.03, 0.12, "length (m)"),
+            p("pointiness", 0.2, 0.0, 0.4, "asymmetry between the ends"),
+        ],
+        build: build_egg,
+    },
+    GeneratorDef {
+        name: "pear",
+        doc: "pear standing on a flattened base: round body and a narrower top",
+        params: &[
+            p("radius", 0.033, 0.015, 0.05, "body radius (m)"),
+            p("height", 0.1, 0.05, 0.15, "height (m)"),
+            p("neck", 0.55, 0.3, 0.9, "top radius relative to the body"),
+        ],
+        build: build_pear,
+    },
+    GeneratorDef {
+        name: "dumbbell",
+        doc: "two discs joined by a bar, standing upright (convex parts)",
+        params: &[
+            p("end_radius", 0.03, 0.015, 0.06, "disc radius (m)"),
+            p("end_length", 0.025, 0.01, 0.05, "disc thickness (m)"),
+            p("bar_radius", 0.013, 0.006, 0.03, "bar radius (m)"),
+            p("length", 0.15, 0.06, 0.25, "total length (m)"),
+        ],
+        build: build_dumbbell,
+    },
+    GeneratorDef {
+        name: "goblet",
+        doc: "wine-glass silhouette (solid): foot, thin stem, cup",
+        params: &[
+            p("cup_radius", 0.035, 0.02, 0.05, "cup radius (m)"),
+            p("height", 0.16, 0.08, 0.25, "height (m)"),
+            p("stem_radius", 0.007, 0.004, 0.015, "stem radius (m)"),
+        ],
+        build: build_goblet,
+    },
+    GeneratorDef {
+        name: "frustum",
+        doc: "truncated cone standing on its base; convex",
+        params: &[
+            p("radius_bottom", 0.04, 0.01, 0.07, "base radius (m)"),
+            p("radius_top", 0.015, 0.003, 0.07, "top radius (m)"),
+            p("height", 0.1, 0.02, 0.25, "height (m)"),
+        ],
+        build: build_frustum,
+    },
+    GeneratorDef {
+        name: "block",
+        doc: "flat block made of boxes: 0 = L, 1 = T, 2 = plus (convex parts)",
+        params: &[
+            p("layout", 0.0, 0.0, 2.0, "0 = L, 1 = T, 2 = plus (rounded)"),
+            p("arm", 0.05, 0.02, 0.08, "arm length from the centre (m)"),
+            p("thickness", 0.025, 0.01, 0.05, "arm width (m)"),
+            p("height", 0.04, 0.01, 0.1, "block height (m)"),
+        ],
+        build: build_block,
+    },
+];
+
+/// Looks a generator up by name.
+pub fn find_generator(name: &str) -> Option<&'static GeneratorDef> {
+    GENERATORS.iter().find(|g| g.name == name)
+}
+
+/// Runs generator `generator` with `seed` and the parameter overrides `params`. `object`
+/// and `source` (manifest or "built-in") name the object in errors.
+pub fn generate(
+    generator: &str,
+    seed: u64,
+    params: &BTreeMap<String, f64>,
+    object: &str,
+    source: &str,
+) -> Result<Generated, ObjectError> {
+    let err = |field: String, message: String| ObjectError::InvalidSpec {
+        source_name: source.to_string(),
+        object: object.to_string(),
+        field,
+        message,
+    };
+    let def = find_generator(generator).ok_or_else(|| {
+        let known: Vec<_> = GENERATORS.iter().map(|g| g.name).collect();
+        err(
+            "shape.generator".into(),
+            format!(
+                "unknown generator `{generator}`; known: {}",
+                known.join(", ")
+            ),
+        )
+    })?;
+    let mut values: HashMap<&'static str, f64> =
+        def.params.iter().map(|pd| (pd.name, pd.default)).collect();
+    for (k, &v) in params {
+        let pd = def.params.iter().find(|pd| pd.name == k).ok_or_else(|| {
+            let known: Vec<_> = def.params.iter().map(|pd| pd.name).collect();
+            err(
+                format!("shape.params.{k}"),
+                format!(
+                    "unknown parameter for generator `{}`; known: {}",
+                    def.name,
+                    known.join(", ")
+                ),
+            )
+        })?;
+        if !v.is_finite() || v < pd.min || v > pd.max {
+            return Err(err(
+                format!("shape.params.{k}"),
+                format!("{v} is outside {}..={} ({})", pd.min, pd.max, pd.doc),
+            ));
+        }
+        values.insert(pd.name, v);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (def.build)(&mut rng, &Params { values }).map_err(|m| {
+        err(
+            "shape.params".into(),
+            format!("generator `{}`: {m}", def.name),
+        )
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Geometry helpers
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn mul(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    if n > 0.0 {
+        mul(a, 1.0 / n)
+    } else {
+        a
+    }
+}
+
+/// A random unit vector (rejection sampling in the unit ball).
+fn unit_vector(rng: &mut ChaCha8Rng) -> [f64; 3] {
+    loop {
+        let v = [
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        ];
+        let n2 = dot(v, v);
+        if n2 > 1e-4 && n2 <= 1.0 {
+            return mul(v, 1.0 / n2.sqrt());
+        }
+    }
+}
+
+/// A box centred at the origin with half extents `h`, outward oriented.
+pub fn box_mesh(h: [f64; 3]) -> TriMesh {
+    let mut v = Vec::with_capacity(8);
+    for k in 0..8 {
+        v.push([
+            if k & 1 == 0 { -h[0] } else { h[0] },
+            if k & 2 == 0 { -h[1] } else { h[1] },
+            if k & 4 == 0 { -h[2] } else { h[2] },
+        ]);
+    }
+    let t = vec![
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+    ];
+    let mut m = TriMesh::new(v, t);
+    m.orient_outward();
+    m
+}
+
+/// The solid of revolution of `profile` (pairs `(r, z)`) about the z axis with `segments`
+/// sides. The profile must start and end on the axis (`r = 0`) with `r > 0` in between.
+pub fn revolve(profile: &[[f64; 2]], segments: usize) -> Result<TriMesh, String> {
+    let n = profile.len();
+    if n < 3 || segments < 3 {
+        return Err("a revolution profile needs 3 points and 3 segments".into());
+    }
+    if profile[0][0] != 0.0 || profile[n - 1][0] != 0.0 {
+        return Err("the profile must start and end on the axis".into());
+    }
+    if profile[1..n - 1]
+        .iter()
+        .any(|q| !q[0].is_finite() || q[0] <= 0.0)
+    {
+        return Err("the profile radius must be positive between its ends".into());
+    }
+    let mut v = vec![[0.0, 0.0, profile[0][1]]];
+    for q in &profile[1..n - 1] {
+        for j in 0..segments {
+            let a = TAU * j as f64 / segments as f64;
+            v.push([q[0] * a.cos(), q[0] * a.sin(), q[1]]);
+        }
+    }
+    let top = v.len() as u32;
+    v.push([0.0, 0.0, profile[n - 1][1]]);
+    let s = segments as u32;
+    let ring = |i: usize, j: u32| 1 + (i as u32) * s + (j % s);
+    let rings = n - 2;
+    let mut t = Vec::new();
+    for j in 0..s {
+        t.push([0, ring(0, j + 1), ring(0, j)]);
+    }
+    for i in 0..rings - 1 {
+        for j in 0..s {
+            let (a0, a1, b0, b1) = (
+                ring(i, j),
+                ring(i, j + 1),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+            );
+            t.push([a0, a1, b1]);
+            t.push([a0, b1, b0]);
+        }
+    }
+    for j in 0..s {
+        t.push([top, ring(rings - 1, j), ring(rings - 1, j + 1)]);
+    }
+    let mut m = TriMesh::new(v, t);
+    m.orient_outward();
+    Ok(m)
+}
+
+/// A unit icosphere: the icosahedron subdivided `level` times, vertices on the unit sphere.
+pub fn icosphere(level: u32) -> TriMesh {
+    let g = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut v: Vec<[f64; 3]> = [
+        [-1.0, g, 0.0],
+        [1.0, g, 0.0],
+        [-1.0, -g, 0.0],
+        [1.0, -g, 0.0],
+        [0.0, -1.0, g],
+        [0.0, 1.0, g],
+        [0.0, -1.0, -g],
+        [0.0, 1.0, -g],
+        [g, 0.0, -1.0],
+        [g, 0.0, 1.0],
+        [-g, 0.0, -1.0],
+        [-g, 0.0, 1.0],
+    ]
+    .iter()
+    .map(|&p| normalize(p))
+    .collect();
+    let mut t: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut nt = Vec::with_capacity(t.len() * 4);
+        for tri in &t {
+            let mut m = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                m[k] = *mid.entry(key).or_insert_with(|| {
+                    v.push(normalize(mul(add(v[a as usize], v[b as usize]), 0.5)));
+                    (v.len() - 1) as u32
+                });
+            }
+            nt.push([tri[0], m[0], m[2]]);
+            nt.push([tri[1], m[1], m[0]]);
+            nt.push([tri[2], m[2], m[1]]);
+            nt.push([m[0], m[1], m[2]]);
+        }
+        t = nt;
+    }
+    let mut mesh = TriMesh::new(v, t);
+    mesh.orient_outward();
+    mesh
+}
+
+/// The star-shaped mesh `{ r(d) d : d on the unit sphere }` sampled on an icosphere of
+/// the given `level`. `r` must be positive.
+pub fn radial_mesh(level: u32, r: impl Fn([f64; 3]) -> f64) -> Result<TriMesh, String> {
+    let mut m = icosphere(level);
+    for v in &mut m.vertices {
+        let rad = r(*v);
+        if !(rad.is_finite() && rad > 0.0) {
+            return Err(format!(
+                "radius {rad} along direction {v:?} is not positive"
+            ));
+        }
+        *v = mul(*v, rad);
+    }
+    m.orient_outward();
+    Ok(m)
+}
+
+/// The vertex rings of a swept tube, one point list per centre-line sample.
+pub type Rings = Vec<Vec<[f64; 3]>>;
+
+/// A tube swept along `centres` with radii `radii` and `sides` sides. The ring frames use
+/// `up` as reference normal, so the curve must never run parallel to `up`. An open tube
+/// is closed at each end by a cone whose apex lies `cap * radius` beyond the end; a
+/// `closed` tube joins its last ring to the first. Returns the mesh and the rings.
+pub fn sweep(
+    centres: &[[f64; 3]],
+    radii: &[f64],
+    sides: usize,
+    up: [f64; 3],
+    closed: bool,
+    cap: f64,
+) -> Result<(TriMesh, Rings), String> {
+    let n = centres.len();
+    if n < 2 || radii.len() != n || sides < 3 {
+        return Err("a sweep needs 2 centres, one radius per centre and 3 sides".into());
+    }
+    let tangent = |i: usize| -> [f64; 3] {
+        let (a, b) = if closed {
+            (centres[(i + n - 1) % n], centres[(i + 1) % n])
+        } else {
+            (centres[i.saturating_sub(1)], centres[(i + 1).min(n - 1)])
+        };
+        normalize(sub(b, a))
+    };
+    let mut rings = Vec::with_capacity(n);
+    for i in 0..n {
+        let tg = tangent(i);
+        let nrm = normalize(sub(up, mul(tg, dot(up, tg))));
+        if dot(nrm, nrm) < 0.5 {
+            return Err("the sweep curve runs parallel to its reference normal".into());
+        }
+        let bin = cross(tg, nrm);
+        let ring: Vec<[f64; 3]> = (0..sides)
+            .map(|j| {
+                let a = TAU * j as f64 / sides as f64;
+                add(
+                    centres[i],
+                    add(mul(nrm, radii[i] * a.cos()), mul(bin, radii[i] * a.sin())),
+                )
+            })
+            .collect();
+        rings.push(ring);
+    }
+    let mut v: Vec<[f64; 3]> = rings.iter().flatten().copied().collect();
+    let s = sides as u32;
+    let idx = |i: usize, j: u32| (i as u32) * s + (j % s);
+    let mut t = Vec::new();
+    let spans = if closed { n } else { n - 1 };
+    for i in 0..spans {
+        let k = (i + 1) % n;
+        for j in 0..s {
+            let (a0, a1, b0, b1) = (idx(i, j), idx(i, j + 1), idx(k, j), idx(k, j + 1));
+            t.push([a0, a1, b1]);
+            t.push([a0, b1, b0]);
+        }
+    }
+    if !closed {
+        let start = sub(centres[0], mul(tangent(0), cap * radii[0]));
+        let end = add(centres[n - 1], mul(tangent(n - 1), cap * radii[n - 1]));
+        let a = v.len() as u32;
+        v.push(start);
+        let b = v.len() as u32;
+        v.push(end);
+        for j in 0..s {
+            t.push([a, idx(0, j + 1), idx(0, j)]);
+            t.push([b, idx(n - 1, j), idx(n - 1, j + 1)]);
+        }
+        rings[0].push(start);
+        rings[n - 1].push(end);
+    }
+    let mut m = TriMesh::new(v, t);
+    m.orient_outward();
+    Ok((m, rings))
+}
+
+/// Convex parts covering a swept tube: hulls of groups of consecutive rings, at most
+/// `max_parts` of them (a closed tube wraps around).
+pub fn ring_parts(
+    rings: &[Vec<[f64; 3]>],
+    closed: bool,
+    max_parts: usize,
+) -> Result<Vec<ConvexHull>, String> {
+    let n = rings.len();
+    let spans = if closed { n } else { n - 1 };
+    let groups = spans.min(max_parts.max(1));
+    let mut parts = Vec::with_capacity(groups);
+    for g in 0..groups {
+        let s = g * spans / groups;
+        let e = (g + 1) * spans / groups;
+        let pts: Vec<[f64; 3]> = (s..=e).flat_map(|i| rings[i % n].iter().copied()).collect();
+        parts.push(ConvexHull::from_points(&pts).ok_or("a tube segment has no 3-D hull")?);
+    }
+    Ok(parts)
+}
+
+/// Points of a cylinder from `a` to `b` with radius `r` (two `sides`-gons).
+pub fn cylinder_points(a: [f64; 3], b: [f64; 3], r: f64, sides: usize) -> Vec<[f64; 3]> {
+    let axis = normalize(sub(b, a));
+    let helper = if axis[2].abs() < 0.9 {
+        [0.0, 0.0, 1.0]
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let u = normalize(cross(axis, helper));
+    let w = cross(axis, u);
+    let mut pts = Vec::with_capacity(2 * sides);
+    for c in [a, b] {
+        for j in 0..sides {
+            let ang = TAU * j as f64 / sides as f64;
+            pts.push(add(c, add(mul(u, r * ang.cos()), mul(w, r * ang.sin()))));
+        }
+    }
+    pts
+}
+
+/// Corner points of the axis-aligned box centred at `c` with half extents `h`.
+pub fn box_points(c: [f64; 3], h: [f64; 3]) -> Vec<[f64; 3]> {
+    box_mesh(h).vertices.iter().map(|&v| add(v, c)).collect()
+}
+
+/// A set of convex parts: the visual mesh is the union of the parts' closed hull meshes.
+#[derive(Debug, Default, Clone)]
+pub struct Assembly {
+    mesh: TriMesh,
+    parts: Vec<ConvexHull>,
+}
+
+impl Assembly {
+    /// An empty assembly.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds the convex hull of `points` as a part.
+    pub fn add(&mut self, points: &[[f64; 3]]) -> Result<&mut Self, String> {
+        let m = convex_hull_mesh(points).ok_or("a part has no 3-D convex hull")?;
+        self.parts.push(ConvexHull {
+            points: m.vertices.clone(),
+        });
+        self.mesh.append(&m);
+        Ok(self)
+    }
+
+    /// Adds a visual component whose collision is covered by `parts`.
+    pub fn add_with_parts(&mut self, mesh: &TriMesh, parts: Vec<ConvexHull>) {
+        self.mesh.append(mesh);
+        self.parts.extend(parts);
+    }
+
+    /// The finished shape.
+    pub fn finish(self) -> Generated {
+        Generated {
+            mesh: self.mesh,
+            parts: Some(self.parts),
+        }
+    }
+}
+
+fn mesh_only(mesh: TriMesh) -> Generated {
+    Generated { mesh, parts: None }
+}
+
+fn lerp(a: f64, b: f64, t: f64) -> f64 {
+    a + (b - a) * t
+}
+
+// ---------------------------------------------------------------------------------------
+// Generators
+
+/// Ray from the origin along unit `d` to the ellipsoid centred at `o` with semi-axes `a`
+/// (which must contain the origin): the positive root of |(t d - o) / a|^2 = 1.
+fn ellipsoid_ray(d: [f64; 3], o: [f64; 3], a: [f64; 3]) -> f64 {
+    let mut qa = 0.0;
+    let mut qb = 0.0;
+    let mut qc = -1.0;
+    for k in 0..3 {
+        let ia = 1.0 / (a[k] * a[k]);
+        qa += d[k] * d[k] * ia;
+        qb += d[k] * o[k] * ia;
+        qc += o[k] * o[k] * ia;
+    }
+    (qb + (qb * qb - qa * qc).max(0.0).sqrt()) / qa
+}
+
+/// Distance along unit `d` to the superellipsoid with semi-axes `a` and exponent `e`.
+fn superquadric_ray(d: [f64; 3], a: [f64; 3], e: f64) -> f64 {
+    let s: f64 = (0..3).map(|k| (d[k].abs() / a[k]).powf(e)).sum();
+    s.powf(-1.0 / e)
+}
+
+/// Smooth seeded noise on the sphere: a sum of `terms` plane waves.
+struct SphereNoise {
+    waves: Vec<([f64; 3], f64, f64, f64)>,
+}
+
+impl SphereNoise {
+    fn new(rng: &mut ChaCha8Rng, terms: usize, total_amp: f64, freq: f64) -> Self {
+        let weights: Vec<f64> = (0..terms).map(|_| rng.random_range(0.5..1.0)).collect();
+        let wsum: f64 = weights.iter().sum::<f64>().max(1e-12);
+        let waves = weights
+            .iter()
+            .map(|w| {
+                let u = unit_vector(rng);
+                let f = freq * rng.random_range(0.8..1.25);
+                let phase = rng.random_range(0.0..TAU);
+                (u, total_amp * w / wsum, f, phase)
+            })
+            .collect();
+        SphereNoise { waves }
+    }
+
+    /// A value in [-total_amp, total_amp].
+    fn at(&self, d: [f64; 3]) -> f64 {
+        self.waves
+            .iter()
+            .map(|(u, a, f, ph)| a * (f * PI * dot(*u, d) + ph).sin())
+            .sum()
+    }
+}
+
+fn build_egad(rng: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let c = p.get("complexity").round();
+    let d = p.get("difficulty");
+    let r0 = (0.042 - 0.0045 * d) * p.get("size");
+    let aspect = [
+        (1.0 + 0.35 * d) * rng.random_range(0.92..1.08),
+        (1.0 - 0.06 * d) * rng.random_range(0.92..1.08),
+        (1.0 - 0.1 * d) * rng.random_range(0.92..1.08),
+    ];
+    let exponent = 2.0 + rng.random_range(0.0..=0.4 * c);
+    let lobes: Vec<([f64; 3], [f64; 3])> = (0..(c as usize) / 2)
+        .map(|_| {
+            let o = mul(unit_vector(rng), 0.4 * r0);
+            let a = [
+                rng.random_range(0.5..0.85) * r0,
+                rng.random_range(0.5..0.85) * r0,
+                rng.random_range(0.5..0.85) * r0,
+            ];
+            (o, a)
+        })
+        .collect();
+    let noise = SphereNoise::new(rng, c as usize, 0.035 * c, 1.0 + 0.6 * c);
+    let level = if c <= 3.0 { 3 } else { 4 };
+    let mut m = radial_mesh(level, |dir| {
+        let mut r = superquadric_ray(dir, [r0, r0, r0], exponent);
+        for (o, a) in &lobes {
+            r = r.max(ellipsoid_ray(dir, *o, *a));
+        }
+        r * (1.0 + noise.at(dir))
+    })?;
+    m.scale(aspect);
+    Ok(mesh_only(m))
+}
+
+fn build_superquadric(rng: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let a = [p.get("rx"), p.get("ry"), p.get("rz")];
+    let e = p.get("exponent");
+    let noise = SphereNoise::new(rng, 3, p.get("bump"), p.get("bump_freq"));
+    let m = radial_mesh(3, |d| superquadric_ray(d, a, e) * (1.0 + noise.at(d)))?;
+    Ok(mesh_only(m))
+}
+
+fn build_can(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, h, b) = (p.get("radius"), p.get("height"), p.get("bevel"));
+    if 2.0 * b >= h.min(r) {
+        return Err("bevel must be smaller than half the radius and half the height".into());
+    }
+    let prof = [
+        [0.0, 0.0],
+        [r - b, 0.0],
+        [r, b],
+        [r, h - b],
+        [r - b, h],
+        [0.0, h],
+    ];
+    Ok(mesh_only(revolve(&dedup(&prof), 48)?))
+}
+
+/// Drops consecutive duplicate profile points (a zero bevel).
+fn dedup(prof: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(prof.len());
+    for q in prof {
+        if out.last() != Some(q) {
+            out.push(*q);
+        }
+    }
+    out
+}
+
+fn build_bottle(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, h) = (p.get("radius"), p.get("height"));
+    let (nr, nh, sh) = (
+        p.get("neck_radius"),
+        p.get("neck_height"),
+        p.get("shoulder"),
+    );
+    let waist = p.get("waist");
+    if nr >= r {
+        return Err("neck_radius must be smaller than radius".into());
+    }
+    let b = 0.003_f64.min(0.2 * r);
+    let lip = 0.004_f64.min(0.3 * nh);
+    let body_top = h - nh - sh;
+    if body_top < 4.0 * b {
+        return Err("neck_height + shoulder leave no room for the body (raise height)".into());
+    }
+    let mut prof = vec![[0.0, 0.0], [r - b, 0.0]];
+    let nb = 8;
+    for i in 0..=nb {
+        let t = i as f64 / nb as f64;
+        let z = lerp(b, body_top, t);
+        prof.push([r * (1.0 - waist * (PI * t).sin().powi(2)), z]);
+    }
+    let ns = 8;
+    for i in 1..=ns {
+        let t = i as f64 / ns as f64;
+        prof.push([
+            nr + (r - nr) * 0.5 * (1.0 + (PI * t).cos()),
+            body_top + sh * t,
+        ]);
+    }
+    let lip_r = (nr * 1.15).min(r);
+    prof.extend_from_slice(&[
+        [nr, h - lip],
+        [lip_r, h - lip],
+        [lip_r, h - 0.2 * lip],
+        [0.8 * lip_r, h],
+        [0.0, h],
+    ]);
+    Ok(mesh_only(revolve(&dedup(&prof), 40)?))
+}
+
+/// Outer radius of a vessel at relative height `t`.
+fn vessel_radius(rb: f64, rt: f64, curve: f64, t: f64) -> f64 {
+    rb + (rt - rb) * ((1.0 - curve) * t + curve * (1.0 - (1.0 - t) * (1.0 - t)))
+}
+
+/// A thick-walled vessel: the closed revolution mesh and convex wall-sector parts.
+fn vessel(
+    rb: f64,
+    rt: f64,
+    h: f64,
+    wall: f64,
+    curve: f64,
+) -> Result<(TriMesh, Vec<ConvexHull>), String> {
+    if wall >= 0.7 * rb.min(rt) || wall >= 0.5 * h {
+        return Err("wall is too thick for the radius or the height".into());
+    }
+    let rad = |z: f64| vessel_radius(rb, rt, curve, z / h);
+    let n = 12;
+    let mut prof = vec![[0.0, 0.0]];
+    for i in 0..=n {
+        let z = h * i as f64 / n as f64;
+        prof.push([rad(z), z]);
+    }
+    for i in (0..=n).rev() {
+        let z = lerp(wall, h, i as f64 / n as f64);
+        prof.push([rad(z) - wall, z]);
+    }
+    prof.push([0.0, wall]);
+    let mesh = revolve(&prof, 48)?;
+    // Collision: floor disc plus wall sectors (outer arc, inner chord) in height bands.
+    let mut parts = Vec::new();
+    let floor: Vec<[f64; 3]> = (0..24)
+        .flat_map(|j| {
+            let a = TAU * j as f64 / 24.0;
+            [
+                [rad(0.0) * a.cos(), rad(0.0) * a.sin(), 0.0],
+                [
+                    (rad(wall) - wall) * a.cos(),
+                    (rad(wall) - wall) * a.sin(),
+                    wall,
+                ],
+            ]
+        })
+        .collect();
+    parts.push(ConvexHull::from_points(&floor).ok_or("vessel floor has no hull")?);
+    let (sectors, bands) = if curve < 0.3 { (10, 1) } else { (7, 2) };
+    for band in 0..bands {
+        let z0 = h * band as f64 / bands as f64;
+        let z1 = h * (band + 1) as f64 / bands as f64;
+        for s in 0..sectors {
+            let a0 = TAU * s as f64 / sectors as f64;
+            let a1 = TAU * (s + 1) as f64 / sectors as f64;
+            let mut pts = Vec::new();
+            for z in [z0, z1] {
+                let ro = rad(z);
+                let ri = (rad(z.max(wall)) - wall).max(0.0);
+                for k in 0..=4 {
+                    let a = lerp(a0, a1, k as f64 / 4.0);
+                    pts.push([ro * a.cos(), ro * a.sin(), z]);
+                }
+                for a in [a0, a1] {
+                    pts.push([ri * a.cos(), ri * a.sin(), z]);
+                }
+            }
+            parts.push(ConvexHull::from_points(&pts).ok_or("vessel sector has no hull")?);
+        }
+    }
+    Ok((mesh, parts))
+}
+
+fn build_vessel(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (mesh, parts) = vessel(
+        p.get("radius_bottom"),
+        p.get("radius_top"),
+        p.get("height"),
+        p.get("wall"),
+        p.get("curve"),
+    )?;
+    Ok(Generated {
+        mesh,
+        parts: Some(parts),
+    })
+}
+
+/// A D-shaped handle on the +x side of a body of radius `r` spanning `z0..z1`.
+fn add_handle(
+    asm: &mut Assembly,
+    r: f64,
+    z0: f64,
+    z1: f64,
+    reach: f64,
+    thick: f64,
+) -> Result<(), String> {
+    let zc = 0.5 * (z0 + z1);
+    let hz = 0.5 * (z1 - z0);
+    let k = 7;
+    let centres: Vec<[f64; 3]> = (0..=k)
+        .map(|i| {
+            let phi = -FRAC_PI_2 + PI * i as f64 / k as f64;
+            [
+                r - 0.5 * thick + reach * phi.cos(),
+                0.0,
+                zc + hz * phi.sin(),
+            ]
+        })
+        .collect();
+    let radii = vec![thick; centres.len()];
+    let (_, rings) = sweep(&centres, &radii, 10, [0.0, 1.0, 0.0], false, 0.0)?;
+    for i in 0..k {
+        let pts: Vec<[f64; 3]> = rings[i]
+            .iter()
+            .chain(rings[i + 1].iter())
+            .copied()
+            .collect();
+        asm.add(&pts)?;
+    }
+    Ok(())
+}
+
+fn build_mug(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, h, wall) = (p.get("radius"), p.get("height"), p.get("wall"));
+    let (body, parts) = vessel(0.95 * r, r, h, wall, 0.0)?;
+    let mut asm = Assembly::new();
+    asm.add_with_parts(&body, parts);
+    let thick = p.get("handle_thickness");
+    add_handle(&mut asm, r, 0.2 * h, 0.85 * h, p.get("handle_reach"), thick)?;
+    Ok(asm.finish())
+}
+
+fn build_banana(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (len, rad, bend) = (p.get("length"), p.get("radius"), p.get("bend"));
+    let rc = len / (2.0 * (bend / 2.0).sin());
+    let n = 13;
+    let mut centres = Vec::with_capacity(n);
+    let mut radii = Vec::with_capacity(n);
+    for i in 0..n {
+        let s = i as f64 / (n - 1) as f64;
+        let th = lerp(-bend / 2.0, bend / 2.0, s);
+        centres.push([rc * th.sin(), rc * th.cos(), rad]);
+        radii.push(rad * (0.35 + 0.65 * (PI * s).sin().sqrt()));
+    }
+    let (mesh, rings) = sweep(&centres, &radii, 14, [0.0, 0.0, 1.0], false, 0.8)?;
+    let parts = ring_parts(&rings, false, 12)?;
+    Ok(Generated {
+        mesh,
+        parts: Some(parts),
+    })
+}
+
+fn build_hammer(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (hl, hr) = (p.get("handle_length"), p.get("handle_radius"));
+    let (head_l, hs) = (p.get("head_length"), p.get("head_size"));
+    let flat = p.get("flat") >= 0.5;
+    let mut asm = Assembly::new();
+    // Head across y at x in [0, hs]; handle along +x from the head.
+    let head_h = if flat {
+        [hs, 0.5 * head_l, 0.004]
+    } else {
+        [0.5 * hs, 0.5 * head_l, 0.5 * hs]
+    };
+    let zc = head_h[2].max(hr);
+    let head_c = if flat {
+        [-hs, 0.0, zc]
+    } else {
+        [0.5 * hs, 0.0, zc]
+    };
+    asm.add(&box_points(head_c, head_h))?;
+    let x0 = if flat { 0.0 } else { hs };
+    asm.add(&cylinder_points([x0, 0.0, zc], [x0 + hl, 0.0, zc], hr, 16))?;
+    Ok(asm.finish())
+}
+
+fn build_vase(rng: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, h) = (p.get("radius"), p.get("height"));
+    let (waves, amp, neck) = (p.get("waves"), p.get("amplitude"), p.get("neck"));
+    let phase = rng.random_range(0.0..TAU);
+    let n = 24;
+    let mut prof = vec![[0.0, 0.0]];
+    for i in 0..=n {
+        let t = i as f64 / n as f64;
+        let rr = r * (1.0 + amp * (TAU * waves * t + phase).sin()) * lerp(1.0, neck, t * t);
+        prof.push([rr.max(0.2 * r), h * t]);
+    }
+    prof.push([0.0, h]);
+    Ok(mesh_only(revolve(&prof, 40)?))
+}
+
+fn build_camera(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (w, d, h) = (p.get("width"), p.get("depth"), p.get("height"));
+    let (lr, ll) = (p.get("lens_radius"), p.get("lens_length"));
+    if 2.0 * lr >= h.min(w) {
+        return Err("lens_radius must be below half the body height and width".into());
+    }
+    let mut asm = Assembly::new();
+    asm.add(&box_points(
+        [0.0, 0.0, 0.5 * h],
+        [0.5 * w, 0.5 * d, 0.5 * h],
+    ))?;
+    let zc = 0.45 * h;
+    asm.add(&cylinder_points(
+        [0.0, -0.5 * d, zc],
+        [0.0, -0.5 * d - ll, zc],
+        lr,
+        20,
+    ))?;
+    let vf = [0.15 * w, 0.3 * d, 0.08 * h];
+    asm.add(&box_points([0.0, 0.0, h + vf[2]], vf))?;
+    Ok(asm.finish())
+}
+
+fn build_teapot(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, h) = (p.get("radius"), p.get("height"));
+    let mut asm = Assembly::new();
+    // Body: hull of a flattened sphere with a flat base and a flat top.
+    let n = 12;
+    let mut body = Vec::new();
+    for i in 0..=n {
+        let z = h * i as f64 / n as f64;
+        let t = 2.0 * z / h - 1.0;
+        let rr = (r * (1.0 - 0.85 * t * t).sqrt()).max(0.35 * r);
+        for j in 0..32 {
+            let a = TAU * j as f64 / 32.0;
+            body.push([rr * a.cos(), rr * a.sin(), z]);
+        }
+    }
+    asm.add(&body)?;
+    // Lid knob.
+    asm.add(&cylinder_points(
+        [0.0, 0.0, h],
+        [0.0, 0.0, h + 0.012],
+        0.012,
+        12,
+    ))?;
+    // Spout: a tapered tube rising at 45 degrees on -x.
+    let base = [-0.75 * r, 0.0, 0.35 * h];
+    let tip = [-(r + 0.5 * h * 0.45), 0.0, 0.85 * h];
+    let mut spout = cylinder_points(base, tip, 0.012, 12);
+    let tip_ring = cylinder_points(tip, add(tip, [-0.001, 0.0, 0.001]), 0.007, 12);
+    spout.truncate(12);
+    spout.extend_from_slice(&tip_ring[..12]);
+    asm.add(&spout)?;
+    add_handle(&mut asm, 0.9 * r, 0.3 * h, 0.85 * h, 0.035, 0.007)?;
+    Ok(asm.finish())
+}
+
+fn build_flashlight(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, len, hr, hl) = (
+        p.get("radius"),
+        p.get("length"),
+        p.get("head_radius"),
+        p.get("head_length"),
+    );
+    if hl >= 0.6 * len {
+        return Err("head_length must be below 60 % of length".into());
+    }
+    let b = 0.002_f64.min(0.2 * r);
+    let flare = 0.3 * hl;
+    let prof = [
+        [0.0, 0.0],
+        [r - b, 0.0],
+        [r, b],
+        [r, len - hl - flare],
+        [hr, len - hl],
+        [hr, len - b],
+        [hr - b, len],
+        [0.0, len],
+    ];
+    Ok(mesh_only(revolve(&dedup(&prof), 32)?))
+}
+
+fn build_prism(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let n = p.get("sides").round() as usize;
+    let (r, h) = (p.get("radius"), p.get("height"));
+    let pts: Vec<[f64; 3]> = (0..n)
+        .flat_map(|j| {
+            let a = TAU * j as f64 / n as f64;
+            [
+                [r * a.cos(), r * a.sin(), 0.0],
+                [r * a.cos(), r * a.sin(), h],
+            ]
+        })
+        .collect();
+    let m = convex_hull_mesh(&pts).ok_or("prism has no hull")?;
+    Ok(mesh_only(m))
+}
+
+fn build_star(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let n = p.get("points").round() as usize;
+    let (ro, ri, h) = (p.get("outer"), p.get("inner"), p.get("height"));
+    if ri >= 0.9 * ro {
+        return Err("inner must be below 90 % of outer".into());
+    }
+    let at = |rad: f64, a: f64, z: f64| [rad * a.cos(), rad * a.sin(), z];
+    let mut asm = Assembly::new();
+    let core: Vec<[f64; 3]> = (0..n)
+        .flat_map(|k| {
+            let a = TAU * (k as f64 + 0.5) / n as f64;
+            [at(ri, a, 0.0), at(ri, a, h)]
+        })
+        .collect();
+    asm.add(&core)?;
+    for k in 0..n {
+        let a0 = TAU * (k as f64 - 0.5) / n as f64;
+        let a1 = TAU * (k as f64 + 0.5) / n as f64;
+        let tip = TAU * k as f64 / n as f64;
+        let mut pts = Vec::new();
+        for z in [0.0, h] {
+            pts.push(at(ri, a0, z));
+            pts.push(at(ri, a1, z));
+            pts.push(at(ro, tip, z));
+        }
+        asm.add(&pts)?;
+    }
+    Ok(asm.finish())
+}
+
+fn build_torus(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (big, small) = (p.get("major"), p.get("minor"));
+    if small >= 0.8 * big {
+        return Err("minor must be below 80 % of major".into());
+    }
+    let n = 24;
+    let centres: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let a = TAU * i as f64 / n as f64;
+            [big * a.cos(), big * a.sin(), small]
+        })
+        .collect();
+    let radii = vec![small; n];
+    let (mesh, rings) = sweep(&centres, &radii, 12, [0.0, 0.0, 1.0], true, 0.0)?;
+    let parts = ring_parts(&rings, true, 12)?;
+    Ok(Generated {
+        mesh,
+        parts: Some(parts),
+    })
+}
+
+fn build_egg(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, len, k) = (p.get("radius"), p.get("length"), p.get("pointiness"));
+    let n = 24;
+    let mut prof = vec![[0.0, 0.0]];
+    for i in 1..n {
+        let th = PI * i as f64 / n as f64;
+        let z = 0.5 * len * (1.0 - th.cos());
+        prof.push([r * th.sin() * (1.0 + k * th.cos()) / (1.0 + k * 0.3), z]);
+    }
+    prof.push([0.0, len]);
+    let mut m = revolve(&prof, 32)?;
+    // Lay it on its side: z -> x.
+    for v in &mut m.vertices {
+        *v = [v[2], v[1], -v[0]];
+    }
+    Ok(mesh_only(m))
+}
+
+fn build_pear(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (r, h, neck) = (p.get("radius"), p.get("height"), p.get("neck"));
+    let n = 24;
+    let mut prof = vec![[0.0, 0.0], [0.45 * r, 0.0]];
+    for i in 1..n {
+        let t = i as f64 / n as f64;
+        let z = h * t;
+        // Body sphere in the lower half blending into a narrower top lobe.
+        let body = r * (1.0 - ((t - 0.32) / 0.34).powi(2)).max(0.0).sqrt();
+        let top_r = neck * r;
+        let top = top_r * (1.0 - ((t - 0.78) / 0.24).powi(2)).max(0.0).sqrt();
+        let rr = body.max(top).max(0.45 * r * (1.0 - t / 0.1).max(0.0));
+        prof.push([rr.max(0.1 * r), z]);
+    }
+    prof.push([0.0, h]);
+    Ok(mesh_only(revolve(&prof, 32)?))
+}
+
+fn build_dumbbell(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (er, el, br, len) = (
+        p.get("end_radius"),
+        p.get("end_length"),
+        p.get("bar_radius"),
+        p.get("length"),
+    );
+    if br >= er || 2.0 * el >= 0.8 * len {
+        return Err("bar_radius must be below end_radius and the ends shorter than the bar".into());
+    }
+    let mut asm = Assembly::new();
+    asm.add(&cylinder_points([0.0, 0.0, 0.0], [0.0, 0.0, el], er, 24))?;
+    asm.add(&cylinder_points(
+        [0.0, 0.0, el],
+        [0.0, 0.0, len - el],
+        br,
+        16,
+    ))?;
+    asm.add(&cylinder_points(
+        [0.0, 0.0, len - el],
+        [0.0, 0.0, len],
+        er,
+        24,
+    ))?;
+    Ok(asm.finish())
+}
+
+fn build_goblet(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (cr, h, sr) = (p.get("cup_radius"), p.get("height"), p.get("stem_radius"));
+    let foot = 0.9 * cr;
+    let stem_top = 0.4 * h;
+    let mut prof = vec![
+        [0.0, 0.0],
+        [foot, 0.0],
+        [foot, 0.004],
+        [sr * 1.5, 0.012],
+        [sr, 0.02],
+        [sr, stem_top],
+    ];
+    let n = 12;
+    for i in 1..=n {
+        let t = i as f64 / n as f64;
+        let rr = cr * (1.0 - (1.0 - t).powi(2)).sqrt().max(sr / cr);
+        prof.push([rr, lerp(stem_top, h, t)]);
+    }
+    prof.push([0.0, h]);
+    Ok(mesh_only(revolve(&prof, 32)?))
+}
+
+fn build_frustum(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let (rb, rt, h) = (p.get("radius_bottom"), p.get("radius_top"), p.get("height"));
+    Ok(mesh_only(revolve(
+        &[[0.0, 0.0], [rb, 0.0], [rt, h], [0.0, h]],
+        40,
+    )?))
+}
+
+fn build_block(_: &mut ChaCha8Rng, p: &Params) -> Result<Generated, String> {
+    let layout = p.get("layout").round() as u32;
+    let (arm, th, h) = (p.get("arm"), p.get("thickness"), p.get("height"));
+    if th >= arm {
+        return Err("thickness must be below arm".into());
+    }
+    let t2 = 0.5 * th;
+    let hz = 0.5 * h;
+    let mut asm = Assembly::new();
+    // Centre square, then arms that touch it face to face.
+    asm.add(&box_points([0.0, 0.0, hz], [t2, t2, hz]))?;
+    let arm_h = 0.5 * (arm - t2);
+    let arm_c = t2 + arm_h;
+    let dirs: &[[f64; 2]] = match layout {
+        0 => &[[1.0, 0.0], [0.0, 1.0]],
+        1 => &[[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]],
+        _ => &[[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]],
+    };
+    for d in dirs {
+        let c = [d[0] * arm_c, d[1] * arm_c, hz];
+        let half = [
+            if d[0] != 0.0 { arm_h } else { t2 },
+            if d[1] != 0.0 { arm_h } else { t2 },
+            hz,
+        ];
+        asm.add(&box_points(c, half))?;
+    }
+    Ok(asm.finish())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn icosphere_approximates_the_unit_sphere() {
+        let m = icosphere(4);
+        m.validate("icosphere").unwrap();
+        let props = m.mass_properties();
+        let exact = 4.0 / 3.0 * PI;
+        assert!(
+            (props.volume - exact).abs() / exact < 0.01,
+            "{}",
+            props.volume
+        );
+        // Sphere of radius 1, unit density: I = 2/5 m r^2 with m = V.
+        let want = 0.4 * props.volume;
+        for k in 0..3 {
+            assert!(props.centroid[k].abs() < 1e-9);
+            assert!((props.inertia_unit_density[k][k] - want).abs() / want < 0.01);
+        }
+        assert!(props.inertia_unit_density[0][1].abs() < 1e-6);
+    }
+
+    #[test]
+    fn revolve_cylinder_volume() {
+        let m = revolve(&[[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [0.0, 2.0]], 256).unwrap();
+        m.validate("cyl").unwrap();
+        // Inscribed 256-gon area: n/2 sin(2 pi / n).
+        let area = 128.0 * (TAU / 256.0).sin();
+        assert_relative_eq!(m.signed_volume(), 2.0 * area, epsilon = 1e-9);
+        assert!(revolve(&[[0.5, 0.0], [1.0, 0.0], [0.0, 1.0]], 8).is_err());
+    }
+
+    #[test]
+    fn superquadric_and_ellipsoid_rays() {
+        assert_relative_eq!(superquadric_ray([1.0, 0.0, 0.0], [2.0, 3.0, 4.0], 2.0), 2.0);
+        assert_relative_eq!(
+            ellipsoid_ray([0.0, 0.0, 1.0], [0.0, 0.0, 0.5], [1.0, 1.0, 1.0]),
+            1.5,
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn every_generator_with_defaults_is_watertight() {
+        for g in GENERATORS {
+            let out = generate(g.name, 7, &BTreeMap::new(), g.name, "test")
+                .unwrap_or_else(|e| panic!("{}: {e}", g.name));
+            out.mesh.validate(g.name).unwrap_or_else(|e| panic!("{e}"));
+            if let Some(parts) = &out.parts {
+                assert!(!parts.is_empty() && parts.len() <= 24, "{}", g.name);
+            }
+        }
+    }
+
+    #[test]
+    fn same_seed_same_mesh_other_seed_other_mesh() {
+        let params = BTreeMap::from([("complexity".to_string(), 5.0)]);
+        let a = generate("egad", 11, &params, "a", "t").unwrap().mesh;
+        let b = generate("egad", 11, &params, "b", "t").unwrap().mesh;
+        let c = generate("egad", 12, &params, "c", "t").unwrap().mesh;
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+    }
+
+    #[test]
+    fn bad_generator_params_are_named() {
+        let e = generate("nope", 0, &BTreeMap::new(), "x", "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("unknown generator") && e.contains("bottle"),
+            "{e}"
+        );
+        let p = BTreeMap::from([("radius".to_string(), 5.0)]);
+        let e = generate("can", 0, &p, "x", "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("shape.params.radius") && e.contains("m.toml"),
+            "{e}"
+        );
+        let p = BTreeMap::from([("radios".to_string(), 0.03)]);
+        let e = generate("can", 0, &p, "x", "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("radios") && e.contains("known: radius"), "{e}");
+        let p = BTreeMap::from([("neck_radius".to_string(), 0.05)]);
+        let e = generate("bottle", 0, &p, "x", "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("neck_radius must be smaller"), "{e}");
+    }
+}
