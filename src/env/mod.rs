@@ -6,11 +6,13 @@
 //! - [`obs`]: the observation frame `<a_{k-1}, phi, tau, theta>`, modalities, history.
 //! - [`reward`]: eq. 4 and eq. 5.
 //! - [`curriculum`]: eq. 6.
+//! - [`grasp`]: the grasping environment (stages 1 and 2, lift) and the scripted baselines.
 //! - [`cartpole`]: continuous CartPole, the learner's textbook check.
 
 pub mod action;
 pub mod api;
 pub mod cartpole;
 pub mod curriculum;
+pub mod grasp;
 pub mod obs;
 pub mod reward;

@@ -1,0 +1,553 @@
+//! The grasping environment: the MDP of Sec. IV on top of the simulator.
+//!
+//! An episode:
+//! 1. **reset**: an object is drawn from the set, its start pose perturbed by the
+//!    curriculum (eq. 6); the hand is placed above it for a top-down grasp in the start
+//!    posture (grasp point = TH/LF fingertip midpoint at the object's centre plus
+//!    `z_offset`);
+//! 2. **stage 1**: the hand follows the human-like closing trajectory T (joint-space
+//!    interpolation with a smooth profile from the start posture to a power grasp) until
+//!    ANY fingertip touches the object or T ends;
+//! 3. **stage 2**: each [`Env::step`] applies eq. 2 to the finger targets and the wrist
+//!    increments for one control period, or lifts when `rho = 1` and judges the grasp.
+//!    Episodes that never lift are truncated after `max_steps` control steps.
+//!
+//! Rewards follow eq. 4 and 5 ([`super::reward`]); observations [`super::obs`].
+
+// ObjectSpec is Copy today but is meant to carry convex hulls; keep the explicit clones.
+#![allow(clippy::clone_on_copy)]
+
+use super::action::{clip_unit, decode, ActionConfig};
+use super::api::{Action, ActionSpec, Env, Step, StepInfo};
+use super::curriculum::{Curriculum, CurriculumConfig};
+use super::obs::{FrameStack, Modality, ObsLayout};
+use super::reward;
+use crate::robot::{Posture, Robot};
+use crate::sim::{script, HandSim, ObjectSpec, Scene, SimConfig, SimError};
+use crate::synergy::SynergyModel;
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+/// Settings of the grasping MDP.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EnvConfig {
+    /// Sensing modality (M1, M2, M3).
+    pub modality: Modality,
+    /// Number of stacked observation frames `h`.
+    pub history: usize,
+    /// Control steps of stage 2 before an episode that never lifts is truncated.
+    pub max_steps: usize,
+    /// Start posture: `open` or `c-shape`.
+    pub start_posture: String,
+    /// Height of the grasp point above the object's centre (m).
+    pub z_offset: f64,
+    /// Duration of the stage-1 closing trajectory T (s).
+    pub closing_time: f64,
+    /// Period at which stage 1 updates targets and checks the tactile sensors (s).
+    pub closing_period: f64,
+    /// Action scales.
+    pub action: ActionConfig,
+    /// Curriculum (eq. 6); each environment keeps its own window.
+    pub curriculum: CurriculumConfig,
+}
+
+impl Default for EnvConfig {
+    fn default() -> Self {
+        EnvConfig {
+            modality: Modality::M3,
+            history: 3,
+            max_steps: 20,
+            start_posture: "c-shape".into(),
+            z_offset: 0.01,
+            closing_time: 1.5,
+            closing_period: 0.02,
+            action: ActionConfig::default(),
+            curriculum: CurriculumConfig {
+                window: 20,
+                ..CurriculumConfig::default()
+            },
+        }
+    }
+}
+
+/// Errors of the grasping environment.
+#[derive(Debug, thiserror::Error)]
+pub enum GraspEnvError {
+    /// A configuration value is out of range.
+    #[error("invalid env config: {field}: {message}")]
+    Config {
+        /// The field.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+    /// The object set is empty.
+    #[error("the object set is empty")]
+    NoObjects,
+    /// The simulator refused the setup.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+}
+
+impl EnvConfig {
+    /// Checks ranges; errors name the field.
+    pub fn validate(&self) -> Result<Posture, GraspEnvError> {
+        let bad = |field, message: String| Err(GraspEnvError::Config { field, message });
+        if self.history == 0 {
+            return bad("history", "must be at least 1".into());
+        }
+        if self.max_steps == 0 {
+            return bad("max_steps", "must be at least 1".into());
+        }
+        if !(self.z_offset.is_finite() && self.z_offset.abs() <= 0.2) {
+            return bad(
+                "z_offset",
+                format!("{} is outside [-0.2, 0.2] m", self.z_offset),
+            );
+        }
+        if !(self.closing_time > 0.0 && self.closing_time <= 10.0) {
+            return bad(
+                "closing_time",
+                format!("{} is outside (0, 10] s", self.closing_time),
+            );
+        }
+        if !(self.closing_period > 0.0 && self.closing_period <= self.closing_time) {
+            return bad(
+                "closing_period",
+                format!("{} must be in (0, closing_time]", self.closing_period),
+            );
+        }
+        if !(self.action.eps_scale > 0.0 && self.action.eps_scale <= 5.0) {
+            return bad(
+                "action.eps_scale",
+                format!("{} is outside (0, 5]", self.action.eps_scale),
+            );
+        }
+        if !(self.action.wrist_scale >= 0.0 && self.action.wrist_scale <= 0.5) {
+            return bad(
+                "action.wrist_scale",
+                format!("{} is outside [0, 0.5] rad", self.action.wrist_scale),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {
+            return bad("curriculum.fixed_rate", "must be in [0, 1]".into());
+        }
+        match self.start_posture.as_str() {
+            "open" => Ok(Posture::Open),
+            "c-shape" => Ok(Posture::CShape),
+            other => bad(
+                "start_posture",
+                format!("unknown posture '{other}': expected open or c-shape"),
+            ),
+        }
+    }
+}
+
+/// What happened in one finished episode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EpisodeSummary {
+    /// Name of the object.
+    pub object: String,
+    /// The object was held after the lift.
+    pub success: bool,
+    /// Stage-2 control steps taken (the lift step included).
+    pub steps: usize,
+    /// Sum of rewards.
+    pub episode_return: f64,
+    /// Whether the agent lifted (false: truncated).
+    pub lifted: bool,
+    /// The physics failed during the episode.
+    pub physics_failure: bool,
+    /// Stage 1 ended on a fingertip contact (false: trajectory T ended first).
+    pub touched_in_stage1: bool,
+}
+
+/// The grasping environment for one simulated hand.
+pub struct GraspEnv {
+    cfg: EnvConfig,
+    start: [f64; 24],
+    closed: [f64; 24],
+    sim: HandSim,
+    objects: Vec<(String, ObjectSpec)>,
+    current_object: usize,
+    synergy: SynergyModel,
+    eps_std: Vec<f64>,
+    finger_limits: [(f64, f64); 22],
+    wrist_limits: [(f64, f64); 2],
+    layout: ObsLayout,
+    stack: FrameStack,
+    curriculum: Curriculum,
+    steps: usize,
+    episode_return: f64,
+    touched_in_stage1: bool,
+    last: Option<EpisodeSummary>,
+    done: bool,
+}
+
+impl GraspEnv {
+    /// Builds the environment: one simulator (its template is rebuilt when the episode's
+    /// object changes), the synergy model of eq. 2 and the object set.
+    pub fn new(
+        robot: &Robot,
+        objects: Vec<(String, ObjectSpec)>,
+        synergy: SynergyModel,
+        sim_cfg: SimConfig,
+        cfg: EnvConfig,
+    ) -> Result<GraspEnv, GraspEnvError> {
+        let posture = cfg.validate()?;
+        let first = objects
+            .first()
+            .map(|o| o.1.clone())
+            .ok_or(GraspEnvError::NoObjects)?;
+        let sim = HandSim::new(robot, first, sim_cfg)?;
+        let layout = ObsLayout::new(cfg.modality, synergy.n_components(), cfg.history);
+        let stack = FrameStack::new(&layout);
+        let eps_std = synergy.eigenvalues()[..synergy.n_components()]
+            .iter()
+            .map(|l| l.max(0.0).sqrt())
+            .collect();
+        let limits = robot.hand_limits();
+        Ok(GraspEnv {
+            start: posture.angles(),
+            closed: script::power_grasp(),
+            sim,
+            current_object: 0,
+            objects,
+            synergy,
+            eps_std,
+            finger_limits: robot.finger_limits(),
+            wrist_limits: [limits[0], limits[1]],
+            layout,
+            stack,
+            curriculum: Curriculum::new(cfg.curriculum.clone()),
+            cfg,
+            steps: 0,
+            episode_return: 0.0,
+            touched_in_stage1: false,
+            last: None,
+            done: true,
+        })
+    }
+
+    /// The observation layout.
+    pub fn layout(&self) -> &ObsLayout {
+        &self.layout
+    }
+
+    /// The simulator (read-only), e.g. for recordings.
+    pub fn sim(&self) -> &HandSim {
+        &self.sim
+    }
+
+    /// The curriculum's current success rate `r_s`.
+    pub fn curriculum_rate(&self) -> f64 {
+        self.curriculum.rate()
+    }
+
+    /// The objects of this environment (name, simulator description).
+    pub fn objects(&self) -> &[(String, ObjectSpec)] {
+        &self.objects
+    }
+
+    /// The summary of the last finished episode.
+    pub fn last_episode(&self) -> Option<&EpisodeSummary> {
+        self.last.as_ref()
+    }
+
+    /// Places object and hand for the episode of `seed` (object choice and eq. 6
+    /// perturbation), without closing. The same seed gives the same scene, so different
+    /// agents can be compared on identical initial poses.
+    pub fn reset_scene(&mut self, seed: u64) -> Result<(), SimError> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let k = rng.random_range(0..self.objects.len());
+        if k != self.current_object {
+            self.sim.set_object(self.objects[k].1.clone())?;
+            self.current_object = k;
+        }
+        let p = self.curriculum.sample(&mut rng);
+        let mut scene = Scene::above(&self.objects[k].1, self.start, self.cfg.z_offset, 0.0);
+        scene.object_xy = [p.dx, p.dy];
+        scene.object_yaw = p.dyaw;
+        self.sim.reset(&scene)?;
+        self.steps = 0;
+        self.episode_return = 0.0;
+        self.touched_in_stage1 = false;
+        self.done = false;
+        Ok(())
+    }
+
+    /// Stage 1: follows the closing trajectory T until any fingertip touches the object.
+    /// Returns whether a touch ended it.
+    fn stage1(&mut self) -> bool {
+        let n = (self.cfg.closing_time / self.cfg.closing_period)
+            .round()
+            .max(1.0) as usize;
+        let per = (self.cfg.closing_period / self.sim.config().dt)
+            .round()
+            .max(1.0) as usize;
+        for i in 1..=n {
+            let s = i as f64 / n as f64;
+            let a = s * s * (3.0 - 2.0 * s);
+            let t: [f64; 24] =
+                std::array::from_fn(|j| self.start[j] + a * (self.closed[j] - self.start[j]));
+            if self.sim.set_targets(&t).is_err() {
+                return false;
+            }
+            for _ in 0..per {
+                if !self.sim.step_physics() {
+                    return false;
+                }
+            }
+            if self.sim.sensors().tactile.contains(&1) {
+                return true;
+            }
+        }
+        false
+    }
+
+    fn push_frame(&mut self, prev_action: &[f32]) {
+        let s = self.sim.sensors();
+        let tactile = s.tactile.map(|b| b == 1);
+        let frame = self
+            .layout
+            .frame(prev_action, &tactile, &s.torque_level, &s.q);
+        self.stack.push(frame);
+    }
+
+    fn finish(&mut self, success: bool, lifted: bool, physics_failure: bool) {
+        if !physics_failure {
+            self.curriculum.record(success);
+        }
+        self.last = Some(EpisodeSummary {
+            object: self.objects[self.current_object].0.clone(),
+            success,
+            steps: self.steps,
+            episode_return: self.episode_return,
+            lifted,
+            physics_failure,
+            touched_in_stage1: self.touched_in_stage1,
+        });
+        self.done = true;
+    }
+
+    fn failed_step(&mut self) -> Step {
+        self.finish(false, false, true);
+        Step {
+            obs: self.stack.stacked(),
+            reward: 0.0,
+            terminated: true,
+            truncated: false,
+            info: StepInfo {
+                success: Some(false),
+                physics_failure: true,
+            },
+        }
+    }
+
+    /// Lifts, judges and ends the episode (the final step of eq. 4).
+    fn lift(&mut self) -> Step {
+        let out = self.sim.lift_and_judge();
+        let failure = out.failure.is_some();
+        let r = if out.success { 1.0 } else { 0.0 };
+        self.episode_return += r;
+        self.steps += 1;
+        self.finish(out.success, true, failure);
+        Step {
+            obs: self.stack.stacked(),
+            reward: r as f32,
+            terminated: true,
+            truncated: false,
+            info: StepInfo {
+                success: Some(out.success),
+                physics_failure: failure,
+            },
+        }
+    }
+
+    /// Runs a scripted baseline (Sec. V-D) on the scene of `seed` and judges it:
+    /// baseline 1 closes all fingers in position mode along T (each joint stops at its
+    /// target or where its motor saturates at the torque limit); baseline 2 does the same
+    /// and freezes FF, MF and RF once their fingertip touches. Both lift at a fixed time
+    /// (T plus a 0.3 s settle).
+    pub fn run_baseline(
+        &mut self,
+        stop_on_touch: bool,
+        seed: u64,
+    ) -> Result<EpisodeSummary, SimError> {
+        self.reset_scene(seed)?;
+        let n = (self.cfg.closing_time / self.cfg.closing_period)
+            .round()
+            .max(1.0) as usize;
+        let per = (self.cfg.closing_period / self.sim.config().dt)
+            .round()
+            .max(1.0) as usize;
+        let mut frozen = [false; 3];
+        let mut targets = self.start;
+        let finger_joints: [std::ops::Range<usize>; 3] = [2..6, 6..10, 10..14];
+        let settle = (0.3 / self.cfg.closing_period).round() as usize;
+        let mut ok = true;
+        'outer: for i in 1..=n + settle {
+            let s = (i as f64 / n as f64).min(1.0);
+            let a = s * s * (3.0 - 2.0 * s);
+            for (j, t) in targets.iter_mut().enumerate() {
+                let f = finger_joints.iter().position(|r| r.contains(&j));
+                if f.is_some_and(|f| frozen[f]) {
+                    continue;
+                }
+                *t = self.start[j] + a * (self.closed[j] - self.start[j]);
+            }
+            if self.sim.set_targets(&targets).is_err() {
+                ok = false;
+                break;
+            }
+            for _ in 0..per {
+                if !self.sim.step_physics() {
+                    ok = false;
+                    break 'outer;
+                }
+            }
+            if stop_on_touch {
+                let t = self.sim.sensors().tactile;
+                for f in 0..3 {
+                    frozen[f] |= t[f] == 1;
+                }
+            }
+        }
+        if !ok {
+            self.finish(false, false, true);
+        } else {
+            let out = self.sim.lift_and_judge();
+            self.steps = 1;
+            self.episode_return = f64::from(u8::from(out.success));
+            self.finish(out.success, true, out.failure.is_some());
+        }
+        Ok(self.last.clone().unwrap_or_else(|| unreachable!()))
+    }
+}
+
+impl Env for GraspEnv {
+    fn obs_dim(&self) -> usize {
+        self.layout.len()
+    }
+
+    fn action_spec(&self) -> ActionSpec {
+        ActionSpec {
+            continuous: self.synergy.n_components() + 2,
+            lift: true,
+        }
+    }
+
+    fn reset(&mut self, seed: u64) -> Vec<f32> {
+        self.stack.clear();
+        if self.reset_scene(seed).is_err() {
+            // A scene the simulator refuses is reported as a physics failure on the
+            // first step.
+            self.done = false;
+            return self.stack.stacked();
+        }
+        self.touched_in_stage1 = self.stage1();
+        let zero = vec![0.0; self.synergy.n_components() + 2];
+        self.push_frame(&zero);
+        self.stack.stacked()
+    }
+
+    fn step(&mut self, a: &Action) -> Step {
+        if self.sim.failure().is_some() {
+            return self.failed_step();
+        }
+        if a.lift {
+            return self.lift();
+        }
+        let s = self.sim.sensors();
+        let theta_f: [f64; 22] = std::array::from_fn(|k| s.q[k + 2]);
+        let d = decode(&self.cfg.action, &self.eps_std, &a.cont, false);
+        let target_f = self.synergy.target(&theta_f, &d.d_eps, &self.finger_limits);
+        let mut targets = [0.0; 24];
+        for (w, (lo, hi)) in self.wrist_limits.iter().enumerate() {
+            targets[w] = (s.q[w] + d.d_wrist[w]).clamp(*lo, *hi);
+        }
+        targets[2..].copy_from_slice(&target_f);
+        if self.sim.set_targets(&targets).is_err() || !self.sim.step_control() {
+            return self.failed_step();
+        }
+        let r = reward::step_reward(&target_f, &theta_f, None);
+        self.episode_return += r;
+        self.steps += 1;
+        let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();
+        self.push_frame(&prev);
+        let truncated = self.steps >= self.cfg.max_steps;
+        if truncated {
+            self.finish(false, false, false);
+        }
+        Step {
+            obs: self.stack.stacked(),
+            reward: r as f32,
+            terminated: false,
+            truncated,
+            info: StepInfo {
+                success: truncated.then_some(false),
+                physics_failure: false,
+            },
+        }
+    }
+}
+
+/// Something that chooses grasp actions from observations: a learned policy or a
+/// scripted rule. Recurrent agents reset their memory in [`Agent::reset`].
+pub trait Agent {
+    /// Called at the start of each episode.
+    fn reset(&mut self);
+    /// The action for the stacked observation `obs`.
+    fn act(&mut self, obs: &[f32]) -> Action;
+}
+
+/// The random agent: every continuous component ~ N(0, 1), lift with probability
+/// `lift_prob` per step. Seeded.
+pub struct RandomAgent {
+    rng: rand_chacha::ChaCha8Rng,
+    n: usize,
+    lift_prob: f64,
+}
+
+impl RandomAgent {
+    /// A random agent for `n` continuous components.
+    pub fn new(n: usize, lift_prob: f64, seed: u64) -> Self {
+        RandomAgent {
+            rng: rand_chacha::ChaCha8Rng::seed_from_u64(seed),
+            n,
+            lift_prob,
+        }
+    }
+}
+
+impl Agent for RandomAgent {
+    fn reset(&mut self) {}
+
+    fn act(&mut self, _obs: &[f32]) -> Action {
+        let normal = rand_distr::StandardNormal;
+        Action {
+            cont: (0..self.n)
+                .map(|_| rand_distr::Distribution::<f64>::sample(&normal, &mut self.rng) as f32)
+                .collect(),
+            lift: self.rng.random_bool(self.lift_prob.clamp(0.0, 1.0)),
+        }
+    }
+}
+
+/// Runs one episode of `agent` on the scene of `seed` and returns its summary.
+pub fn run_episode(env: &mut GraspEnv, agent: &mut dyn Agent, seed: u64) -> EpisodeSummary {
+    agent.reset();
+    let mut obs = env.reset(seed);
+    loop {
+        let a = agent.act(&obs);
+        let s = env.step(&a);
+        obs = s.obs;
+        if s.terminated || s.truncated {
+            break;
+        }
+    }
+    env.last_episode()
+        .cloned()
+        .unwrap_or_else(|| unreachable!("a finished episode has a summary"))
+}

@@ -1,0 +1,77 @@
+//! The grasping MDP end to end on the simulator: baselines, a random agent, determinism.
+
+use grasp::env::api::Env;
+use grasp::env::grasp::{run_episode, EnvConfig, GraspEnv, RandomAgent};
+use grasp::robot::{Posture, Robot, Side};
+use grasp::sim::{script, ObjectSpec, SimConfig};
+use grasp::synergy::SynergyModel;
+use rand::{Rng, SeedableRng};
+
+/// A synergy model fitted to noisy postures between the C-shape and the power grasp: a
+/// small stand-in for the shipped model that keeps this test independent of it.
+fn test_model(robot: &Robot) -> SynergyModel {
+    let lim = robot.finger_limits();
+    let a = Posture::CShape.angles();
+    let b = script::power_grasp();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let rows: Vec<[f64; 22]> = (0..300)
+        .map(|_| {
+            let t: f64 = rng.random();
+            std::array::from_fn(|k| {
+                (a[k + 2] + t * (b[k + 2] - a[k + 2]) + rng.random_range(-0.05..0.05))
+                    .clamp(lim[k].0, lim[k].1)
+            })
+        })
+        .collect();
+    SynergyModel::fit(&rows, 5).expect("fit")
+}
+
+fn env() -> GraspEnv {
+    let robot = Robot::builtin(Side::Left);
+    let model = test_model(&robot);
+    let objects = vec![
+        ("box".to_string(), ObjectSpec::default_box()),
+        ("cylinder".to_string(), ObjectSpec::default_cylinder()),
+    ];
+    GraspEnv::new(
+        &robot,
+        objects,
+        model,
+        SimConfig::default(),
+        EnvConfig::default(),
+    )
+    .expect("env")
+}
+
+#[test]
+fn baseline2_grasps_the_test_box_and_the_random_agent_rarely_does() {
+    let mut e = env();
+    let b2: usize = (0..4)
+        .map(|s| usize::from(e.run_baseline(true, s).unwrap().success))
+        .sum();
+    assert!(b2 >= 2, "baseline 2 succeeded {b2}/4");
+    let mut agent = RandomAgent::new(7, 0.15, 5);
+    let random: usize = (0..4)
+        .map(|s| usize::from(run_episode(&mut e, &mut agent, 100 + s).success))
+        .sum();
+    assert!(random <= 1, "random agent succeeded {random}/4");
+}
+
+#[test]
+fn observations_follow_the_layout_and_episodes_are_deterministic() {
+    let mut e = env();
+    // M3, PCA5, h = 3: 3 x (7 + 5 + 20 + 24) = 168.
+    assert_eq!(e.obs_dim(), 168);
+    let o1 = e.reset(7);
+    assert_eq!(o1.len(), 168);
+    // The first two frames are zero padding; the last holds real joint angles.
+    assert!(o1[..112].iter().all(|&v| v == 0.0));
+    assert!(o1[112..].iter().any(|&v| v != 0.0));
+    let run = |e: &mut GraspEnv| {
+        let mut agent = RandomAgent::new(7, 0.2, 9);
+        run_episode(e, &mut agent, 42)
+    };
+    let a = run(&mut e);
+    let b = run(&mut e);
+    assert_eq!(a, b);
+}
