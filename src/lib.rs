@@ -12,10 +12,12 @@
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
 //!   textbook control task.
+//! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout.
 //! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 
 pub mod env;
+pub mod eval;
 pub mod hardware;
 pub mod objects;
 pub mod policy;

@@ -1,0 +1,362 @@
+//! Evaluation: per-object success rates of learned and scripted agents on identical
+//! initial poses (common random numbers), with Wilson 95 % confidence intervals, in the
+//! layout of the paper's Table I.
+
+use crate::env::api::Action;
+use crate::env::grasp::{run_episode, Agent, EpisodeSummary, GraspEnv, GraspEnvError};
+use crate::ppo::LoadedPolicy;
+use candle_core::{Device, Tensor};
+use rand::SeedableRng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Wilson score interval for `k` successes in `n` trials at 95 % (z = 1.96): (low, high).
+/// `n = 0` gives (0, 1).
+pub fn wilson(k: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let z = 1.959_963_984_540_054_f64;
+    let n = n as f64;
+    let p = k as f64 / n;
+    let z2 = z * z;
+    let denom = 1.0 + z2 / n;
+    let centre = (p + z2 / (2.0 * n)) / denom;
+    let half = z * ((p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt()) / denom;
+    ((centre - half).max(0.0), (centre + half).min(1.0))
+}
+
+/// A learned policy acting in the grasping MDP: observations are normalised as in
+/// training, the GRU state is carried across steps and reset at episode starts. Actions
+/// are the distribution's mode (deterministic) unless `stochastic`, then sampled from a
+/// seeded RNG.
+pub struct PolicyAgent {
+    policy: LoadedPolicy,
+    hidden: Option<Tensor>,
+    first: bool,
+    stochastic: bool,
+    rng: rand_chacha::ChaCha8Rng,
+}
+
+impl PolicyAgent {
+    /// Wraps a loaded checkpoint.
+    pub fn new(policy: LoadedPolicy, stochastic: bool, seed: u64) -> Self {
+        PolicyAgent {
+            policy,
+            hidden: None,
+            first: true,
+            stochastic,
+            rng: rand_chacha::ChaCha8Rng::seed_from_u64(seed),
+        }
+    }
+
+    fn try_act(&mut self, obs: &[f32]) -> candle_core::Result<Action> {
+        let x = self.policy.normalize(obs);
+        let d = x.len();
+        let t = Tensor::from_vec(x, (1, 1, d), &Device::Cpu)?;
+        let s = Tensor::from_vec(
+            vec![if self.first { 1.0f32 } else { 0.0 }],
+            (1, 1),
+            &Device::Cpu,
+        )?;
+        if self.hidden.is_none() {
+            self.hidden = self
+                .policy
+                .policy
+                .initial_state(1)
+                .map_err(|e| candle_core::Error::Msg(e.to_string()))?;
+        }
+        let out = self
+            .policy
+            .policy
+            .forward_seq(&t, &s, self.hidden.as_ref())
+            .map_err(|e| candle_core::Error::Msg(e.to_string()))?;
+        self.hidden = out.hidden;
+        self.first = false;
+        let a = if self.stochastic {
+            out.dist.sample(&mut self.rng)?
+        } else {
+            out.dist.mode()?
+        };
+        Ok(Action {
+            cont: a.cont,
+            lift: a.rho.first().is_some_and(|&r| r > 0.5),
+        })
+    }
+}
+
+impl Agent for PolicyAgent {
+    fn reset(&mut self) {
+        self.hidden = None;
+        self.first = true;
+    }
+
+    fn act(&mut self, obs: &[f32]) -> Action {
+        self.try_act(obs).unwrap_or_else(|e| {
+            tracing::error!("policy failed ({e}); lifting to end the episode");
+            Action {
+                cont: vec![0.0; self.policy.policy.action_spec().continuous],
+                lift: true,
+            }
+        })
+    }
+}
+
+/// Which agent an evaluation runs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AgentSpec {
+    /// Scripted baseline 1 (close all fingers).
+    Baseline1,
+    /// Scripted baseline 2 (FF, MF, RF stop at contact).
+    Baseline2,
+    /// A checkpoint folder of a trained policy.
+    Checkpoint(std::path::PathBuf),
+}
+
+impl AgentSpec {
+    /// Display name for tables.
+    pub fn label(&self) -> String {
+        match self {
+            AgentSpec::Baseline1 => "Baseline 1".into(),
+            AgentSpec::Baseline2 => "Baseline 2".into(),
+            AgentSpec::Checkpoint(p) => p.display().to_string(),
+        }
+    }
+}
+
+/// Per-object result of one agent.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ObjectResult {
+    /// Object name.
+    pub object: String,
+    /// Trials run.
+    pub trials: usize,
+    /// Successful trials.
+    pub successes: usize,
+    /// Success rate.
+    pub rate: f64,
+    /// Wilson 95 % interval (low, high).
+    pub ci95: (f64, f64),
+    /// Mean stage-2 control steps per episode.
+    pub mean_steps: f64,
+    /// Episodes that ended in a physics failure.
+    pub physics_failures: usize,
+}
+
+/// All results of one agent.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AgentResult {
+    /// Agent label.
+    pub agent: String,
+    /// Per object, in the set's order.
+    pub objects: Vec<ObjectResult>,
+    /// Mean success over objects.
+    pub mean_rate: f64,
+    /// Wilson interval over all trials.
+    pub ci95: (f64, f64),
+    /// Mean control steps per episode.
+    pub mean_steps: f64,
+    /// Control steps per wall second (stage 2 and lift steps of all episodes).
+    pub control_steps_per_s: f64,
+    /// Wall time (s).
+    pub wall_s: f64,
+}
+
+/// Seed of trial `t` on object `o`: shared by all agents (common random numbers).
+pub fn trial_seed(seed: u64, object: usize, trial: usize) -> u64 {
+    crate::env::api::episode_seed(seed, object, trial as u64)
+}
+
+/// Evaluates `agent` on every object of `make_env`'s set for `trials` trials each, in a
+/// pool of `threads` workers. `make_env(o)` builds an environment whose object set is
+/// the single object `o` (so the scene of a trial depends only on its seed), and
+/// `make_agent` builds the agent for a worker.
+pub fn evaluate(
+    names: &[String],
+    trials: usize,
+    seed: u64,
+    threads: usize,
+    make_env: &(dyn Fn(usize) -> Result<GraspEnv, GraspEnvError> + Sync),
+    spec: &AgentSpec,
+) -> Result<AgentResult, EvalError> {
+    let start = std::time::Instant::now();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .map_err(|e| EvalError::Agent(e.to_string()))?;
+    let per_object: Vec<Vec<EpisodeSummary>> = pool.install(|| {
+        (0..names.len())
+            .into_par_iter()
+            .map(|o| -> Result<Vec<EpisodeSummary>, EvalError> {
+                let mut env = make_env(o)?;
+                let mut agent: Option<PolicyAgent> = match spec {
+                    AgentSpec::Checkpoint(dir) => Some(PolicyAgent::new(
+                        crate::ppo::load_policy(dir)
+                            .map_err(|e| EvalError::Agent(format!("{}: {e}", dir.display())))?,
+                        false,
+                        seed,
+                    )),
+                    _ => None,
+                };
+                (0..trials)
+                    .map(|t| {
+                        let s = trial_seed(seed, o, t);
+                        Ok(match (spec, agent.as_mut()) {
+                            (AgentSpec::Baseline1, _) => env.run_baseline(false, s)?,
+                            (AgentSpec::Baseline2, _) => env.run_baseline(true, s)?,
+                            (_, Some(a)) => run_episode(&mut env, a, s),
+                            (_, None) => unreachable!("a checkpoint agent is built above"),
+                        })
+                    })
+                    .collect()
+            })
+            .collect::<Result<Vec<_>, _>>()
+    })?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let mut objects = Vec::new();
+    let (mut k_all, mut n_all, mut steps_all) = (0, 0, 0usize);
+    for (name, eps) in names.iter().zip(&per_object) {
+        let k = eps.iter().filter(|e| e.success).count();
+        let n = eps.len();
+        let steps: usize = eps.iter().map(|e| e.steps).sum();
+        k_all += k;
+        n_all += n;
+        steps_all += steps;
+        objects.push(ObjectResult {
+            object: name.clone(),
+            trials: n,
+            successes: k,
+            rate: k as f64 / n.max(1) as f64,
+            ci95: wilson(k, n),
+            mean_steps: steps as f64 / n.max(1) as f64,
+            physics_failures: eps.iter().filter(|e| e.physics_failure).count(),
+        });
+    }
+    let mean_rate = objects.iter().map(|o| o.rate).sum::<f64>() / objects.len().max(1) as f64;
+    Ok(AgentResult {
+        agent: spec.label(),
+        mean_rate,
+        ci95: wilson(k_all, n_all),
+        mean_steps: steps_all as f64 / n_all.max(1) as f64,
+        control_steps_per_s: steps_all as f64 / wall_s.max(1e-9),
+        wall_s,
+        objects,
+    })
+}
+
+/// Errors of an evaluation.
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    /// The environment could not be built.
+    #[error(transparent)]
+    Env(#[from] GraspEnvError),
+    /// The simulator refused a scene.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    /// The agent could not be loaded or run.
+    #[error("agent: {0}")]
+    Agent(String),
+}
+
+/// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
+/// the mean. Rates in percent.
+pub fn markdown_table(results: &[AgentResult]) -> String {
+    let Some(first) = results.first() else {
+        return String::new();
+    };
+    let mut s = String::from("| agent |");
+    for o in &first.objects {
+        s.push_str(&format!(" {} |", o.object));
+    }
+    s.push_str(" mean | 95 % CI | steps |\n|---|");
+    for _ in &first.objects {
+        s.push_str("---|");
+    }
+    s.push_str("---|---|---|\n");
+    for r in results {
+        s.push_str(&format!("| {} |", r.agent));
+        for o in &r.objects {
+            s.push_str(&format!(" {:.0} |", 100.0 * o.rate));
+        }
+        s.push_str(&format!(
+            " {:.1} | {:.1}-{:.1} | {:.2} |\n",
+            100.0 * r.mean_rate,
+            100.0 * r.ci95.0,
+            100.0 * r.ci95.1,
+            r.mean_steps
+        ));
+    }
+    s
+}
+
+/// CSV with one row per (agent, object).
+pub fn csv_table(results: &[AgentResult]) -> String {
+    let mut s = String::from(
+        "agent,object,trials,successes,rate,ci95_low,ci95_high,mean_steps,physics_failures\n",
+    );
+    for r in results {
+        for o in &r.objects {
+            s.push_str(&format!(
+                "{},{},{},{},{:.4},{:.4},{:.4},{:.3},{}\n",
+                r.agent.replace(',', ";"),
+                o.object,
+                o.trials,
+                o.successes,
+                o.rate,
+                o.ci95.0,
+                o.ci95.1,
+                o.mean_steps,
+                o.physics_failures
+            ));
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wilson_hand_computed() {
+        // k = 8, n = 10: p = 0.8, z^2 = 3.8415; centre = (0.8 + 0.19207) / 1.38415 =
+        // 0.71673; half = 1.96 sqrt(0.016 + 0.0096037) / 1.38415 = 0.22658.
+        let (lo, hi) = wilson(8, 10);
+        assert!((lo - 0.4902).abs() < 1e-3, "{lo}");
+        assert!((hi - 0.9433).abs() < 1e-3, "{hi}");
+        let (lo, hi) = wilson(0, 10);
+        assert!(lo == 0.0 && (hi - 0.2775).abs() < 1e-3, "{hi}");
+        assert_eq!(wilson(0, 0), (0.0, 1.0));
+        let (lo, hi) = wilson(10, 10);
+        assert!((lo - 0.7225).abs() < 1e-3 && (hi - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tables_have_one_row_per_agent_and_object() {
+        let r = AgentResult {
+            agent: "Baseline 1".into(),
+            objects: vec![ObjectResult {
+                object: "box".into(),
+                trials: 10,
+                successes: 8,
+                rate: 0.8,
+                ci95: wilson(8, 10),
+                mean_steps: 1.0,
+                physics_failures: 0,
+            }],
+            mean_rate: 0.8,
+            ci95: wilson(8, 10),
+            mean_steps: 1.0,
+            control_steps_per_s: 3.0,
+            wall_s: 1.0,
+        };
+        let md = markdown_table(std::slice::from_ref(&r));
+        assert!(
+            md.contains("| Baseline 1 | 80 | 80.0 | 49.0-94.3 | 1.00 |"),
+            "{md}"
+        );
+        let csv = csv_table(&[r]);
+        assert_eq!(csv.lines().count(), 2);
+        assert!(csv.contains("Baseline 1,box,10,8,0.8000"));
+    }
+}
