@@ -10,8 +10,12 @@ use std::hint::black_box;
 
 fn gripping_sim() -> (HandSim, Scene) {
     let obj = ObjectSpec::default_box();
-    let mut sim = HandSim::new(&Robot::builtin(Side::Left), obj, SimConfig::default())
-        .expect("default sim builds");
+    let mut sim = HandSim::new(
+        &Robot::builtin(Side::Left),
+        obj.clone(),
+        SimConfig::default(),
+    )
+    .expect("default sim builds");
     let scene = Scene::above(&obj, Posture::Open.angles(), 0.03, 0.0);
     sim.reset(&scene).expect("default scene");
     sim.set_targets(&power_grasp()).expect("finite targets");

@@ -6,8 +6,13 @@ use grasp::robot::{Posture, Robot, Side};
 use grasp::sim::script::{close_and_lift, power_grasp, ScriptOptions};
 use grasp::sim::{HandSim, ObjectSpec, PhysicsFailure, Scene, SimConfig};
 
-fn sim_with(obj: ObjectSpec) -> HandSim {
-    HandSim::new(&Robot::builtin(Side::Left), obj, SimConfig::default()).unwrap()
+fn sim_with(obj: &ObjectSpec) -> HandSim {
+    HandSim::new(
+        &Robot::builtin(Side::Left),
+        obj.clone(),
+        SimConfig::default(),
+    )
+    .unwrap()
 }
 
 fn grasp_scene(obj: &ObjectSpec) -> Scene {
@@ -17,7 +22,7 @@ fn grasp_scene(obj: &ObjectSpec) -> Scene {
 #[test]
 fn closed_hand_lifts_a_box_and_a_slippery_box_drops() {
     let grippy = ObjectSpec::cuboid([0.025, 0.025, 0.04], 0.1, 0.8);
-    let mut sim = sim_with(grippy);
+    let mut sim = sim_with(&grippy);
     sim.reset(&grasp_scene(&grippy)).unwrap();
     let r = close_and_lift(&mut sim, ScriptOptions::default(), &power_grasp());
     let lift = r.lift.unwrap();
@@ -26,7 +31,7 @@ fn closed_hand_lifts_a_box_and_a_slippery_box_drops() {
     assert!(lift.object_lowest_z > 0.10, "{lift:?}");
 
     let slippery = ObjectSpec::cuboid([0.025, 0.025, 0.04], 0.1, 0.05);
-    sim.set_object(slippery).unwrap();
+    sim.set_object(slippery.clone()).unwrap();
     sim.reset(&grasp_scene(&slippery)).unwrap();
     let r = close_and_lift(&mut sim, ScriptOptions::default(), &power_grasp());
     let lift = r.lift.unwrap();
@@ -38,7 +43,7 @@ fn closed_hand_lifts_a_box_and_a_slippery_box_drops() {
 #[test]
 fn open_hand_never_lifts_the_box() {
     let obj = ObjectSpec::default_box();
-    let mut sim = sim_with(obj);
+    let mut sim = sim_with(&obj);
     sim.reset(&grasp_scene(&obj)).unwrap();
     let opts = ScriptOptions {
         close: false,
@@ -53,7 +58,7 @@ fn open_hand_never_lifts_the_box() {
 #[test]
 fn tactile_turns_on_only_on_contact() {
     let obj = ObjectSpec::default_box();
-    let mut sim = sim_with(obj);
+    let mut sim = sim_with(&obj);
     // Object out of reach: 20 cm below the grasp point... the hand is high above it.
     sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.25, 0.0))
         .unwrap();
@@ -93,7 +98,7 @@ fn tactile_turns_on_only_on_contact() {
 fn torque_level_rises_when_a_finger_presses_on_a_fixed_obstacle() {
     // A 20 kg box does not move under a finger: it acts as a fixed obstacle.
     let obj = ObjectSpec::cuboid([0.04, 0.04, 0.04], 20.0, 0.8);
-    let mut sim = sim_with(obj);
+    let mut sim = sim_with(&obj);
     sim.reset(&grasp_scene(&obj)).unwrap();
     let mut t = sim.targets();
     // Close FF only, far past the obstacle.
@@ -120,7 +125,7 @@ fn torque_level_rises_when_a_finger_presses_on_a_fixed_obstacle() {
 fn two_runs_with_one_seed_are_bit_identical() {
     let obj = ObjectSpec::default_box();
     let run = || {
-        let mut sim = sim_with(obj);
+        let mut sim = sim_with(&obj);
         let scene = Scene::randomized(&obj, Posture::Open.angles(), 0.03, 0.01, 0.1, 42);
         sim.reset(&scene).unwrap();
         let r = close_and_lift(&mut sim, ScriptOptions::default(), &power_grasp());
@@ -133,7 +138,7 @@ fn two_runs_with_one_seed_are_bit_identical() {
     assert_eq!(p1, p2);
     assert_eq!(l1, l2);
     // A reset of the same sim gives the same run too.
-    let mut sim = sim_with(obj);
+    let mut sim = sim_with(&obj);
     let scene = Scene::randomized(&obj, Posture::Open.angles(), 0.03, 0.01, 0.1, 42);
     for _ in 0..2 {
         sim.reset(&scene).unwrap();
@@ -145,7 +150,7 @@ fn two_runs_with_one_seed_are_bit_identical() {
 
 #[test]
 fn nan_target_is_an_error_not_a_panic() {
-    let mut sim = sim_with(ObjectSpec::default_box());
+    let mut sim = sim_with(&ObjectSpec::default_box());
     let mut t = power_grasp();
     t[0] = f64::NAN;
     assert!(sim.set_targets(&t).is_err());
@@ -157,7 +162,7 @@ fn nan_target_is_an_error_not_a_panic() {
 #[test]
 fn object_rests_stably_with_the_hand_away() {
     let obj = ObjectSpec::default_box();
-    let mut sim = sim_with(obj);
+    let mut sim = sim_with(&obj);
     sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.3, 0.0))
         .unwrap();
     let p0 = sim.object_position();
@@ -173,7 +178,7 @@ fn broken_physics_ends_the_episode_without_panic() {
     let obj = ObjectSpec::default_box();
     let mut cfg = SimConfig::default();
     cfg.failure.max_speed = 1e-3;
-    let mut sim = HandSim::new(&Robot::builtin(Side::Left), obj, cfg).unwrap();
+    let mut sim = HandSim::new(&Robot::builtin(Side::Left), obj.clone(), cfg).unwrap();
     sim.reset(&grasp_scene(&obj)).unwrap();
     sim.set_targets(&power_grasp()).unwrap();
     assert!(!sim.step_control());

@@ -2,6 +2,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
+use grasp::objects::sets::{self, BuildContext};
 use grasp::robot::joints::{FINGERS, KEY_CLOSING_JOINTS};
 use grasp::robot::{Posture, Robot, Side};
 use grasp::sim::script::{close_and_lift, power_grasp, ScriptOptions};
@@ -10,15 +11,6 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::Global;
-
-/// Object kinds of `--object`.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ObjectKind {
-    /// A 5 x 5 x 8 cm box.
-    Box,
-    /// A cylinder of radius 3 cm, 10 cm tall.
-    Cylinder,
-}
 
 /// Start postures of `--posture`.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -32,19 +24,20 @@ pub enum StartPosture {
 /// Run one scripted grasp in the simulator.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp sim --close --lift\n  grasp sim --object cylinder --mass 0.2 --friction 0.5 --posture c-shape --close --lift --json\n  grasp sim --config configs/sim.toml --friction 0.05 --close --lift"
+    after_help = "Examples:\n  grasp sim --close --lift\n  grasp sim --object cylinder --mass 0.2 --friction 0.5 --posture c-shape --close --lift --json\n  grasp sim --object can_soup --close --lift\n  grasp sim --object ./meshes/part.obj --depth 0.02 --close --lift --json\n  grasp sim --config configs/sim.toml --friction 0.05 --close --lift\n\n`--object` takes `box`, `cylinder`, any built-in library object (`grasp objects list`), or\nan `--objects`-style spec (mesh file, manifest, folder) that holds exactly one object.\nBy default the grasp point (the thumb/little-finger tip midpoint) is `--depth` below the\nobject's top but not below its centre; `--z-offset` places it relative to the centre."
 )]
 pub struct SimArgs {
     /// Simulator config (TOML); built-in defaults when absent.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// The object to grasp.
-    #[arg(long, value_enum, default_value = "box")]
-    pub object: ObjectKind,
-    /// Object mass (kg); default 0.1 for the box, 0.15 for the cylinder.
+    /// The object to grasp: box, cylinder, a library object name, or a spec of one object.
+    #[arg(long, default_value = "box")]
+    pub object: String,
+    /// Object mass (kg); default 0.1 for the box, 0.15 for the cylinder, the library's mass
+    /// for library objects.
     #[arg(long)]
     pub mass: Option<f64>,
-    /// Object friction coefficient in [0, 1] (default 0.8).
+    /// Object friction coefficient in [0, 1] (default 0.8, or the library's value).
     #[arg(long)]
     pub friction: Option<f64>,
     /// Start posture of the hand.
@@ -56,9 +49,12 @@ pub struct SimArgs {
     /// Lift and judge the grasp at the end.
     #[arg(long)]
     pub lift: bool,
-    /// Height of the grasp point above the object centre (m).
-    #[arg(long, default_value_t = 0.03, allow_negative_numbers = true)]
-    pub z_offset: f64,
+    /// Height of the grasp point above the object centre (m); overrides --depth.
+    #[arg(long, allow_negative_numbers = true)]
+    pub z_offset: Option<f64>,
+    /// Depth of the grasp point below the object's top (m), never below its centre.
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    pub depth: f64,
     /// Uniform x/y noise of the grasp point (m), drawn with --seed.
     #[arg(long, default_value_t = 0.0)]
     pub noise: f64,
@@ -75,10 +71,7 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
         None => SimConfig::default(),
     };
-    let mut obj = match a.object {
-        ObjectKind::Box => ObjectSpec::default_box(),
-        ObjectKind::Cylinder => ObjectSpec::default_cylinder(),
-    };
+    let mut obj = object_spec(&a.object)?;
     if let Some(m) = a.mass {
         obj.mass = m;
     }
@@ -86,7 +79,11 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         obj.friction = f;
     }
     obj.validate().context("--mass/--friction")?;
-    for (name, v) in [("--z-offset", a.z_offset), ("--noise", a.noise)] {
+    for (name, v) in [
+        ("--z-offset", a.z_offset.unwrap_or(0.0)),
+        ("--depth", a.depth),
+        ("--noise", a.noise),
+    ] {
         if !v.is_finite() || v.abs() > 1.0 {
             bail!("{name} = {v}: must be finite and at most 1 m in size");
         }
@@ -102,9 +99,13 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         StartPosture::CShape => Posture::CShape.angles(),
     };
     let robot = Robot::builtin(Side::Left);
-    let mut sim = HandSim::new(&robot, obj, cfg)?;
+    let mut sim = HandSim::new(&robot, obj.clone(), cfg)?;
     let seed = g.seed.unwrap_or(0);
-    let scene = Scene::randomized(&obj, start, a.z_offset, a.noise, 0.0, seed);
+    let scene = match a.z_offset {
+        Some(z) => Scene::above(&obj, start, z, 0.0),
+        None => Scene::top_down(&obj, start, a.depth, 0.0),
+    }
+    .with_noise(a.noise, 0.0, seed);
     sim.reset(&scene)?;
     let opts = ScriptOptions {
         close: a.close,
@@ -130,9 +131,10 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    let shape = match obj.shape {
+    let shape = match &obj.shape {
         ObjectShape::Box { half } => format!(
-            "box {:.0} x {:.0} x {:.0} mm",
+            "{} {:.0} x {:.0} x {:.0} mm",
+            obj.name,
             2000.0 * half[0],
             2000.0 * half[1],
             2000.0 * half[2]
@@ -141,9 +143,19 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
             radius,
             half_height,
         } => format!(
-            "cylinder r {:.0} mm, h {:.0} mm",
+            "{} r {:.0} mm, h {:.0} mm",
+            obj.name,
             1000.0 * radius,
             2000.0 * half_height
+        ),
+        ObjectShape::Library {
+            part_count, half, ..
+        } => format!(
+            "{} {:.0} x {:.0} x {:.0} mm, {part_count} convex part(s)",
+            obj.name,
+            2000.0 * half[0],
+            2000.0 * half[1],
+            2000.0 * half[2]
         ),
     };
     println!(
@@ -209,4 +221,32 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         r.sim_time / wall.max(1e-9)
     );
     Ok(())
+}
+
+/// The object of `--object`: the primitive `box` or `cylinder`, or the one library object
+/// the spec resolves to.
+fn object_spec(arg: &str) -> Result<ObjectSpec> {
+    match arg.trim() {
+        "box" => return Ok(ObjectSpec::default_box()),
+        "cylinder" => return Ok(ObjectSpec::default_cylinder()),
+        _ => {}
+    }
+    let mut specs = sets::resolve_specs(arg).with_context(|| {
+        format!("--object `{arg}` (besides library objects, `box` and `cylinder` are known)")
+    })?;
+    if specs.len() != 1 {
+        bail!(
+            "--object `{arg}` holds {} objects; it must name exactly one (see `grasp objects list --set {arg}`)",
+            specs.len()
+        );
+    }
+    let spec = specs.remove(0);
+    let object = sets::build(&spec, &BuildContext::from_env())
+        .with_context(|| format!("--object: cannot build object `{}`", spec.spec.name))?;
+    ObjectSpec::from_object(&object).with_context(|| {
+        format!(
+            "--object: object `{}` has no collision geometry",
+            object.name
+        )
+    })
 }

@@ -182,12 +182,9 @@ impl FrameStack {
     }
 }
 
-/// Maps a torque reading to a level 0..5 with ascending thresholds: the level is the
-/// number of thresholds less than or equal to the reading. With the paper's simulation
-/// thresholds {-20, -10, 0, 10, 20}: -25 -> 0, -20 -> 1, -5 -> 2, 0 -> 3, 15 -> 4, 20 -> 5.
-pub fn torque_level(reading: f64, thresholds: &[f64; 5]) -> u8 {
-    thresholds.iter().filter(|&&t| reading >= t).count() as u8
-}
+/// The torque levels live in [`crate::util::levels`]; re-exported for callers of
+/// `env::obs::torque_level`.
+pub use crate::util::levels::torque_level;
 
 #[cfg(test)]
 mod tests {
@@ -239,18 +236,5 @@ mod tests {
         assert_eq!(s.stacked()[0], 1.0);
         s.clear();
         assert!(s.stacked().iter().all(|&v| v == 0.0));
-    }
-
-    #[test]
-    fn torque_levels_hand_computed() {
-        let t = [-20.0, -10.0, 0.0, 10.0, 20.0];
-        assert_eq!(torque_level(-25.0, &t), 0);
-        assert_eq!(torque_level(-20.0, &t), 1);
-        assert_eq!(torque_level(-15.0, &t), 1);
-        assert_eq!(torque_level(-5.0, &t), 2);
-        assert_eq!(torque_level(0.0, &t), 3);
-        assert_eq!(torque_level(15.0, &t), 4);
-        assert_eq!(torque_level(20.0, &t), 5);
-        assert_eq!(torque_level(1e9, &t), 5);
     }
 }

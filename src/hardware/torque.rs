@@ -8,7 +8,7 @@
 //! with the real robot's thresholds {-200, -100, 0, 100, 200}.
 
 use super::N_TENDONS;
-use crate::env::obs::torque_level;
+use crate::util::levels::torque_level;
 
 /// The paper's thresholds for the real robot's tendon readings.
 pub const REAL_THRESHOLDS: [f64; 5] = [-200.0, -100.0, 0.0, 100.0, 200.0];

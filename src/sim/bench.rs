@@ -62,7 +62,7 @@ struct Tally {
 }
 
 fn run_env(sim: &mut HandSim, seed: u64, deadline: Instant) -> Tally {
-    let obj = *sim.object();
+    let obj = sim.object().clone();
     let mut t = Tally::default();
     let mut k = 0;
     while Instant::now() < deadline {

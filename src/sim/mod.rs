@@ -5,8 +5,10 @@
 //! - [`config`]: [`SimConfig`], every number, with defaults and validation.
 //! - [`world`]: [`HandSim`], building, reset, targets, stepping, sensors, lift and judgement.
 //! - [`sensors`]: the PD effort read-back and the torque levels.
-//! - [`placement`]: the top-down grasp mapping that places the hand.
-//! - [`object`]: primitive objects.
+//! - [`placement`]: the hand placed by the top-down grasp mapping of
+//!   [`crate::robot::grasp_map`].
+//! - [`object`]: [`ObjectSpec`], any library object (or a primitive) as the simulator's
+//!   body: convex parts, mass properties, friction.
 //! - [`script`]: the scripted close-and-lift used by `grasp sim` and the tests.
 
 //!
@@ -45,7 +47,7 @@ pub mod sensors;
 pub mod world;
 
 pub use config::SimConfig;
-pub use object::{ObjectShape, ObjectSpec};
+pub use object::{ConvexParts, ObjectShape, ObjectSpec};
 pub use sensors::Sensors;
 pub use world::{HandSim, LiftOutcome, PhysicsFailure, Scene, SimError};
 

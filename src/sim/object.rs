@@ -1,8 +1,29 @@
-//! The object to grasp: a small set of primitives of the simulator's own, until the object
-//! library provides shapes. One dynamic rigid body with one collider.
+//! The object to grasp as the simulator sees it: a name, convex collision geometry, mass
+//! properties and friction. One dynamic rigid body with one collider.
+//!
+//! An [`ObjectSpec`] is built from any library object ([`ObjectSpec::from_object`], the
+//! convex parts of [`crate::objects::Object::collider_parts`]) or from the simulator's own
+//! primitives ([`ObjectSpec::cuboid`], [`ObjectSpec::default_box`],
+//! [`ObjectSpec::default_cylinder`], [`ObjectSpec::with_density`]) used by tests.
+//!
+//! # Body frame
+//! For every object the rigid body's origin is the **centre of the object's bounding box**,
+//! z up when resting. The object resting upright on the table (top at z = 0) therefore has
+//! its body origin at `z = `[`ObjectSpec::rest_height`] (half its height), and the library's
+//! object frame (origin at the bottom centre of the bounding box) sits at
+//! `(0, 0, -rest_height)` in the body frame.
+//!
+//! # Mass properties
+//! The body's mass, centre of mass and inertia are set explicitly
+//! ([`ObjectSpec::mass_properties`]); colliders have density 0. Primitives are uniform
+//! solids; library objects keep the centre of mass and inertia the library computed from
+//! the visual mesh (not from the hulls, whose union overestimates the volume). Changing
+//! [`ObjectSpec::mass`] scales the inertia with it.
 
-use rapier3d::prelude::{ColliderBuilder, SharedShape};
-use serde::{Deserialize, Serialize};
+use crate::objects::{Object, ObjectError as LibraryError, Primitive};
+use rapier3d::prelude::{ColliderBuilder, MassProperties, Pose, SharedShape, Vector};
+use serde::Serialize;
+use std::sync::Arc;
 
 /// Error of an invalid object description.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -16,9 +37,33 @@ pub struct ObjectError {
     pub message: &'static str,
 }
 
-/// Shape of a primitive object, in its body frame (z up when resting).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+/// The convex parts of a library object, in the simulator's body frame.
+#[derive(Clone)]
+pub struct ConvexParts(Arc<Vec<(Pose, SharedShape)>>);
+
+impl ConvexParts {
+    /// The parts: each a convex shape with its pose in the body frame.
+    pub fn parts(&self) -> &[(Pose, SharedShape)] {
+        &self.0
+    }
+}
+
+impl std::fmt::Debug for ConvexParts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ConvexParts({} parts)", self.0.len())
+    }
+}
+
+impl PartialEq for ConvexParts {
+    /// Parts are equal when they share the same storage (they are never rebuilt).
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// Shape of an object in its body frame (origin at the bounding-box centre, z up).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
 pub enum ObjectShape {
     /// A box with half extents (m).
     Box {
@@ -32,6 +77,22 @@ pub enum ObjectShape {
         /// Half height (m).
         half_height: f64,
     },
+    /// The convex parts of a library object.
+    Library {
+        /// The collision pieces (not serialised; `part_count` says how many).
+        #[serde(skip)]
+        parts: ConvexParts,
+        /// Number of convex pieces.
+        part_count: usize,
+        /// Half extents of the bounding box of the visual mesh (m).
+        half: [f64; 3],
+        /// Centre of mass in the body frame (m).
+        com: [f64; 3],
+        /// Inertia about the centre of mass per kilogram of mass (m^2), body axes.
+        unit_inertia: [[f64; 3]; 3],
+        /// Volume of the solid (m^3).
+        volume: f64,
+    },
 }
 
 impl ObjectShape {
@@ -43,49 +104,68 @@ impl ObjectShape {
                 radius,
                 half_height,
             } => std::f64::consts::PI * radius * radius * 2.0 * half_height,
+            ObjectShape::Library { volume, .. } => volume,
         }
     }
 
-    /// Height of the body origin above a supporting plane when resting upright (m).
-    pub fn rest_height(&self) -> f64 {
+    /// Half extents of the bounding box (m).
+    pub fn half_extents(&self) -> [f64; 3] {
         match *self {
-            ObjectShape::Box { half } => half[2],
-            ObjectShape::Cylinder { half_height, .. } => half_height,
-        }
-    }
-
-    /// The collision shape (rapier's cylinder runs along y; it is turned upright by the
-    /// collider pose from [`ObjectShape::collider`]).
-    pub fn shared_shape(&self) -> SharedShape {
-        match *self {
-            ObjectShape::Box { half } => {
-                SharedShape::cuboid(half[0] as f32, half[1] as f32, half[2] as f32)
-            }
+            ObjectShape::Box { half } | ObjectShape::Library { half, .. } => half,
             ObjectShape::Cylinder {
                 radius,
                 half_height,
-            } => SharedShape::cylinder(half_height as f32, radius as f32),
+            } => [radius, radius, half_height],
         }
     }
 
-    /// A collider builder with the shape upright in the body frame.
+    /// Height of the body origin above a supporting plane when resting upright (m): half
+    /// the bounding box's height.
+    pub fn rest_height(&self) -> f64 {
+        self.half_extents()[2]
+    }
+
+    fn primitive(&self) -> Option<Primitive> {
+        match *self {
+            ObjectShape::Box { half } => Some(Primitive::Box { half_extents: half }),
+            ObjectShape::Cylinder {
+                radius,
+                half_height,
+            } => Some(Primitive::Cylinder {
+                radius,
+                half_height,
+            }),
+            ObjectShape::Library { .. } => None,
+        }
+    }
+
+    /// A collider builder with the shape upright in the body frame: one shape for a
+    /// primitive or a single-part object, a compound of the convex parts otherwise.
+    /// Density, friction and collision groups are left to the caller.
     pub fn collider(&self) -> ColliderBuilder {
-        let b = ColliderBuilder::new(self.shared_shape());
         match self {
-            ObjectShape::Box { .. } => b,
-            ObjectShape::Cylinder { .. } => b.rotation(rapier3d::math::Vector::new(
-                std::f32::consts::FRAC_PI_2,
-                0.0,
-                0.0,
-            )),
+            ObjectShape::Library { parts, .. } => match parts.parts() {
+                [(pose, shape)] => ColliderBuilder::new(shape.clone()).position(*pose),
+                many => ColliderBuilder::new(SharedShape::compound(many.to_vec())),
+            },
+            _ => {
+                // Box and cylinder are primitives by construction.
+                let (pose, shape) = self
+                    .primitive()
+                    .map(|p| p.to_shared_shape())
+                    .unwrap_or((Pose::IDENTITY, SharedShape::ball(0.01)));
+                ColliderBuilder::new(shape).position(pose)
+            }
         }
     }
 }
 
-/// A primitive object with its mass and friction.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// An object to simulate: its name, shape, mass and friction.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ObjectSpec {
+    /// The object's name (results are reported per name): the library name, or `box` /
+    /// `cylinder` for the simulator's primitives.
+    pub name: String,
     /// The shape.
     pub shape: ObjectShape,
     /// Mass (kg).
@@ -95,9 +175,10 @@ pub struct ObjectSpec {
 }
 
 impl ObjectSpec {
-    /// A box of `mass` kg with half extents `half`.
+    /// A box named `box` of `mass` kg with half extents `half`.
     pub fn cuboid(half: [f64; 3], mass: f64, friction: f64) -> Self {
         ObjectSpec {
+            name: "box".into(),
             shape: ObjectShape::Box { half },
             mass,
             friction,
@@ -112,6 +193,7 @@ impl ObjectSpec {
     /// The default cylinder: radius 3 cm, height 10 cm, 150 g, friction 0.8.
     pub fn default_cylinder() -> Self {
         ObjectSpec {
+            name: "cylinder".into(),
             shape: ObjectShape::Cylinder {
                 radius: 0.03,
                 half_height: 0.05,
@@ -121,16 +203,97 @@ impl ObjectSpec {
         }
     }
 
-    /// A spec of `mass` kg with the density `rho` (kg/m^3) of the shape.
+    /// A spec of the shape with the density `rho` (kg/m^3), named after its kind (`box`,
+    /// `cylinder` or `object`).
     pub fn with_density(shape: ObjectShape, rho: f64, friction: f64) -> Self {
+        let name = match shape {
+            ObjectShape::Box { .. } => "box",
+            ObjectShape::Cylinder { .. } => "cylinder",
+            ObjectShape::Library { .. } => "object",
+        };
         ObjectSpec {
-            shape,
+            name: name.into(),
             mass: rho * shape.volume(),
+            shape,
             friction,
         }
     }
 
-    /// Checks sizes (1 mm .. 1 m), mass (1 g .. 20 kg) and friction ([0, 1]).
+    /// The same spec under another name.
+    pub fn named(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+
+    /// The simulator's view of a library object: its convex parts, mass, centre of mass,
+    /// inertia and friction, moved into the body frame (origin at the bounding-box centre,
+    /// see the module docs). Fails when the object has no valid convex part.
+    pub fn from_object(object: &Object) -> Result<ObjectSpec, LibraryError> {
+        let (lo, hi) = (object.bbox.min, object.bbox.max);
+        let c = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+        let shift = Pose::translation(-c[0] as f32, -c[1] as f32, -c[2] as f32);
+        let parts: Vec<(Pose, SharedShape)> = object
+            .collider_parts()?
+            .into_iter()
+            .map(|(pose, shape)| (shift * pose, shape))
+            .collect();
+        let half = object.bbox.extents().map(|e| 0.5 * e);
+        let com = [0, 1, 2].map(|k| object.com[k] - c[k]);
+        let m = object.mass_kg;
+        let unit_inertia = object.inertia.map(|row| row.map(|v| v / m));
+        Ok(ObjectSpec {
+            name: object.name.clone(),
+            shape: ObjectShape::Library {
+                part_count: parts.len(),
+                parts: ConvexParts(Arc::new(parts)),
+                half,
+                com,
+                unit_inertia,
+                volume: object.volume_m3,
+            },
+            mass: m,
+            friction: object.friction,
+        })
+    }
+
+    /// Height of the body origin above the table when the object rests upright (m).
+    pub fn rest_height(&self) -> f64 {
+        self.shape.rest_height()
+    }
+
+    /// Mass, centre of mass and inertia of the body (body frame), for
+    /// `RigidBodyBuilder::additional_mass_properties`: a uniform solid for primitives, the
+    /// library's values for library objects, scaled to [`ObjectSpec::mass`].
+    pub fn mass_properties(&self) -> MassProperties {
+        let m = self.mass;
+        match &self.shape {
+            ObjectShape::Library {
+                com, unit_inertia, ..
+            } => {
+                let i = unit_inertia.map(|row| row.map(|v| (v * m) as f32));
+                // Column-major.
+                let inertia = rapier3d::math::Matrix::from_cols_array(&[
+                    i[0][0], i[1][0], i[2][0], i[0][1], i[1][1], i[2][1], i[0][2], i[1][2], i[2][2],
+                ]);
+                let com = Vector::new(com[0] as f32, com[1] as f32, com[2] as f32);
+                MassProperties::with_inertia_matrix(com, m as f32, inertia)
+            }
+            shape => {
+                let p = shape
+                    .primitive()
+                    .map_or([0.0; 3], |p| p.principal_inertia(m));
+                MassProperties::new(
+                    Vector::ZERO,
+                    m as f32,
+                    Vector::new(p[0] as f32, p[1] as f32, p[2] as f32),
+                )
+            }
+        }
+    }
+
+    /// Checks sizes (half extents 0.5 mm .. 0.5 m), mass (1 g .. 20 kg), friction
+    /// ([0, 1]) and, for library objects, a finite centre of mass inside the bounding box
+    /// and a finite inertia with positive diagonal.
     pub fn validate(&self) -> Result<(), ObjectError> {
         let size = |field: &'static str, v: f64| {
             if v.is_finite() && (0.0005..=0.5).contains(&v) {
@@ -143,7 +306,7 @@ impl ObjectSpec {
                 })
             }
         };
-        match self.shape {
+        match &self.shape {
             ObjectShape::Box { half } => {
                 size("half[0]", half[0])?;
                 size("half[1]", half[1])?;
@@ -153,8 +316,36 @@ impl ObjectSpec {
                 radius,
                 half_height,
             } => {
-                size("radius", radius)?;
-                size("half_height", half_height)?;
+                size("radius", *radius)?;
+                size("half_height", *half_height)?;
+            }
+            ObjectShape::Library {
+                half,
+                com,
+                unit_inertia,
+                ..
+            } => {
+                size("half[0]", half[0])?;
+                size("half[1]", half[1])?;
+                size("half[2]", half[2])?;
+                for k in 0..3 {
+                    if !(com[k].is_finite() && com[k].abs() <= half[k] + 1e-6) {
+                        return Err(ObjectError {
+                            field: "com",
+                            value: com[k],
+                            message: "must be finite and inside the bounding box",
+                        });
+                    }
+                }
+                for (k, row) in unit_inertia.iter().enumerate() {
+                    if row.iter().any(|v| !v.is_finite()) || row[k] <= 0.0 {
+                        return Err(ObjectError {
+                            field: "inertia",
+                            value: row[k],
+                            message: "must be finite with a positive diagonal",
+                        });
+                    }
+                }
             }
         }
         if !(self.mass.is_finite() && (0.001..=20.0).contains(&self.mass)) {
@@ -178,6 +369,14 @@ impl ObjectSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::objects::sets::{build, resolve_specs};
+    use crate::objects::BuildContext;
+
+    fn library(name: &str) -> Object {
+        let dir = tempfile::tempdir().unwrap();
+        let spec = resolve_specs(name).unwrap().remove(0);
+        build(&spec, &BuildContext::with_cache_dir(dir.path())).unwrap()
+    }
 
     #[test]
     fn volumes_and_density() {
@@ -187,11 +386,13 @@ mod tests {
         assert!((b.volume() - 8.0 * 6e-6).abs() < 1e-15);
         let s = ObjectSpec::with_density(b, 1000.0, 0.5);
         assert!((s.mass - 0.048).abs() < 1e-12);
+        assert_eq!(s.name, "box");
         let c = ObjectShape::Cylinder {
             radius: 0.1,
             half_height: 0.5,
         };
         assert!((c.volume() - std::f64::consts::PI * 0.01).abs() < 1e-12);
+        assert_eq!(c.rest_height(), 0.5);
     }
 
     #[test]
@@ -203,5 +404,75 @@ mod tests {
         s.friction = 0.5;
         s.mass = f64::NAN;
         assert_eq!(s.validate().unwrap_err().field, "mass");
+    }
+
+    #[test]
+    fn box_mass_properties_are_a_uniform_solid() {
+        // 2 x 4 x 6 cm, 0.6 kg: Ixx = m (b^2 + c^2) / 12 = 0.6 (16 + 36) e-4 / 12 = 2.6e-4.
+        let s = ObjectSpec::cuboid([0.01, 0.02, 0.03], 0.6, 0.5);
+        let mp = s.mass_properties();
+        assert!((mp.mass() - 0.6).abs() < 1e-6);
+        let i = mp.principal_inertia();
+        assert!((i.x - 2.6e-4).abs() < 1e-9, "{i:?}");
+        assert!(
+            (i.z - 0.6 * (4.0 + 16.0) * 1e-4 / 12.0).abs() < 1e-9,
+            "{i:?}"
+        );
+        assert_eq!(mp.local_com, Vector::ZERO);
+    }
+
+    #[test]
+    fn library_box_matches_the_primitive_box() {
+        // box_gelatin: 9 x 7 x 3 cm, a primitive in the library.
+        let o = library("box_gelatin");
+        let s = ObjectSpec::from_object(&o).unwrap();
+        s.validate().unwrap();
+        assert_eq!(s.name, "box_gelatin");
+        assert!((s.rest_height() - 0.015).abs() < 1e-9);
+        assert_eq!(s.mass, o.mass_kg);
+        assert_eq!(s.friction, o.friction);
+        let prim = ObjectSpec::cuboid([0.045, 0.035, 0.015], o.mass_kg, o.friction);
+        let (a, b) = (s.mass_properties(), prim.mass_properties());
+        assert!((a.mass() - b.mass()).abs() < 1e-6);
+        assert!(a.local_com.length() < 1e-6, "{:?}", a.local_com);
+        let (ia, ib) = (a.principal_inertia(), b.principal_inertia());
+        // Principal moments agree up to their order.
+        let mut va = [ia.x, ia.y, ia.z];
+        let mut vb = [ib.x, ib.y, ib.z];
+        va.sort_by(f32::total_cmp);
+        vb.sort_by(f32::total_cmp);
+        for k in 0..3 {
+            assert!((va[k] - vb[k]).abs() < 1e-3 * vb[k], "{va:?} {vb:?}");
+        }
+        // The collider spans the bounding box centred on the body origin.
+        let aabb = s.shape.collider().build().compute_aabb();
+        assert!((aabb.mins.z + 0.015).abs() < 1e-4, "{aabb:?}");
+        assert!((aabb.maxs.x - 0.045).abs() < 1e-4, "{aabb:?}");
+    }
+
+    #[test]
+    fn multi_part_object_becomes_a_compound_in_the_body_frame() {
+        let o = library("mug");
+        let s = ObjectSpec::from_object(&o).unwrap();
+        s.validate().unwrap();
+        let ObjectShape::Library {
+            part_count, com, ..
+        } = &s.shape
+        else {
+            panic!("not a library shape")
+        };
+        assert_eq!(*part_count, o.hulls.len());
+        // The centre of mass moved with the frame: object-frame z minus half the height.
+        let h = o.bbox.extents()[2];
+        assert!((com[2] - (o.com[2] - 0.5 * h)).abs() < 1e-12);
+        let aabb = s.shape.collider().build().compute_aabb();
+        assert!((aabb.mins.z as f64 + 0.5 * h).abs() < 2e-3, "{aabb:?}");
+        assert!((aabb.maxs.z as f64 - 0.5 * h).abs() < 2e-3, "{aabb:?}");
+        // Doubling the mass doubles the inertia.
+        let mut heavy = s.clone();
+        heavy.mass *= 2.0;
+        let (a, b) = (s.mass_properties(), heavy.mass_properties());
+        let ratio = b.principal_inertia().x / a.principal_inertia().x;
+        assert!((ratio - 2.0).abs() < 1e-4, "{ratio}");
     }
 }

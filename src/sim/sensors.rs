@@ -1,5 +1,6 @@
-//! Sensor models: the PD motor effort a joint reports, its mapping to the paper's six
-//! torque levels, and the per-step [`Sensors`] reading.
+//! Sensor models: the PD motor effort a joint reports and the per-step [`Sensors`]
+//! reading. Efforts are mapped to the paper's six torque levels by
+//! [`crate::util::levels::torque_level`].
 //!
 //! Units: efforts are N m (N for the lift). A torque reading in *sim units* is
 //! `effort * torque_scale` (default 100 units per N m), so the paper's simulation
@@ -14,12 +15,6 @@ use serde::Serialize;
 /// non-negative.
 pub fn pd_effort(kp: f64, kd: f64, target: f64, q: f64, qdot: f64, effort: f64) -> f64 {
     (kp * (target - q) - kd * qdot).clamp(-effort, effort)
-}
-
-/// Maps a reading (sim units) to a level: the number of thresholds `<= value`. With the
-/// paper's thresholds [-20, -10, 0, 10, 20] the levels are 0..=5; a NaN reading gives 0.
-pub fn torque_level(value: f64, thresholds: &[f64]) -> u8 {
-    thresholds.iter().filter(|t| **t <= value).count() as u8
 }
 
 /// Everything the hand senses at one instant.
@@ -44,24 +39,6 @@ pub struct Sensors {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const T: [f64; 5] = [-20.0, -10.0, 0.0, 10.0, 20.0];
-
-    #[test]
-    fn levels_hand_computed() {
-        assert_eq!(torque_level(-35.0, &T), 0);
-        assert_eq!(torque_level(-20.0, &T), 1);
-        assert_eq!(torque_level(-15.0, &T), 1);
-        assert_eq!(torque_level(-10.0, &T), 2);
-        assert_eq!(torque_level(-0.5, &T), 2);
-        assert_eq!(torque_level(0.0, &T), 3);
-        assert_eq!(torque_level(9.99, &T), 3);
-        assert_eq!(torque_level(10.0, &T), 4);
-        assert_eq!(torque_level(19.0, &T), 4);
-        assert_eq!(torque_level(20.0, &T), 5);
-        assert_eq!(torque_level(1e9, &T), 5);
-        assert_eq!(torque_level(f64::NAN, &T), 0);
-    }
 
     #[test]
     fn pd_effort_hand_computed_and_clamped() {

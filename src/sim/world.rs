@@ -22,6 +22,9 @@
 //! - Self-collisions between hand links are disabled by collision groups: hand colliders
 //!   collide with the table and the object only; the object collides with everything.
 //! - Friction: hand 1.0, table 0.8, object from its spec; combine rule MIN everywhere.
+//! - The object: one dynamic body whose origin is the centre of the object's bounding box
+//!   (see [`super::object`]), with the mass properties of its [`ObjectSpec`] set on the
+//!   body and one collider of density 0 (a compound of convex parts for library objects).
 //!
 //! # Reset
 //! The world is built once as a template (bodies, colliders, joints are `Clone`); a reset
@@ -31,10 +34,11 @@
 use super::config::SimConfig;
 use super::object::{ObjectError, ObjectSpec};
 use super::placement::{hand_root_pose, PlacementError};
-use super::sensors::{pd_effort, torque_level, Sensors};
+use super::sensors::{pd_effort, Sensors};
 use crate::robot::joints::{COUPLED_FINGERS, HAND_JOINTS};
 use crate::robot::model::{Geometry, JointKind};
 use crate::robot::Robot;
+use crate::util::levels::torque_level;
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rapier3d::prelude::*;
@@ -126,9 +130,43 @@ impl Scene {
             start,
             object_xy: [0.0, 0.0],
             object_yaw: 0.0,
-            grasp_point: [0.0, 0.0, object.shape.rest_height() + z_offset],
+            grasp_point: [0.0, 0.0, object.rest_height() + z_offset],
             hand_yaw,
         }
+    }
+
+    /// A top-down grasp of any object: the object at the origin with yaw 0, the grasp point
+    /// on its vertical axis `depth` m below its top, but never below its centre (so a flat
+    /// object is gripped around its middle and a tall one near its top), the hand at
+    /// `hand_yaw`. For the default 8 cm box, `depth = 0.01` is [`Scene::above`] with
+    /// `z_offset = 0.03`.
+    pub fn top_down(object: &ObjectSpec, start: [f64; 24], depth: f64, hand_yaw: f64) -> Scene {
+        let h = object.rest_height();
+        let z = (2.0 * h - depth).max(h);
+        Scene {
+            start,
+            object_xy: [0.0, 0.0],
+            object_yaw: 0.0,
+            grasp_point: [0.0, 0.0, z],
+            hand_yaw,
+        }
+    }
+
+    /// This scene with uniform noise: x/y of the grasp point within `+-xy_noise` m and the
+    /// hand yaw within `+-yaw_noise` rad, drawn from `ChaCha8Rng::seed_from_u64(seed)`.
+    pub fn with_noise(mut self, xy_noise: f64, yaw_noise: f64, seed: u64) -> Scene {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut u = |a: f64| {
+            if a > 0.0 {
+                rng.random_range(-a..=a)
+            } else {
+                0.0
+            }
+        };
+        self.grasp_point[0] += u(xy_noise);
+        self.grasp_point[1] += u(xy_noise);
+        self.hand_yaw += u(yaw_noise);
+        self
     }
 
     /// [`Scene::above`] with uniform noise: x/y of the grasp point within `+-xy_noise` m and
@@ -141,19 +179,7 @@ impl Scene {
         yaw_noise: f64,
         seed: u64,
     ) -> Scene {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let mut s = Scene::above(object, start, z_offset, 0.0);
-        let mut u = |a: f64| {
-            if a > 0.0 {
-                rng.random_range(-a..=a)
-            } else {
-                0.0
-            }
-        };
-        s.grasp_point[0] += u(xy_noise);
-        s.grasp_point[1] += u(xy_noise);
-        s.hand_yaw += u(yaw_noise);
-        s
+        Scene::above(object, start, z_offset, 0.0).with_noise(xy_noise, yaw_noise, seed)
     }
 
     fn check(&self) -> Result<(), SimError> {
@@ -555,7 +581,7 @@ impl HandSim {
             hand_bodies,
             hand_colliders,
             distal_colliders,
-            object,
+            object: object.clone(),
             object_body: RigidBodyHandle::invalid(),
             object_collider: ColliderHandle::invalid(),
             object_start: Vector3::zeros(),
@@ -565,7 +591,7 @@ impl HandSim {
             physics_steps: 0,
             failure: None,
         };
-        sim.insert_object(object);
+        sim.insert_object(object.clone());
         let start = crate::robot::Posture::Open.angles();
         sim.reset(&Scene::above(&object, start, 0.03, 0.0))?;
         Ok(sim)
@@ -585,16 +611,18 @@ impl HandSim {
                 true,
             );
         }
+        // Mass properties set on the body; the collider has density 0.
         let body = t.bodies.insert(
             RigidBodyBuilder::dynamic()
                 .can_sleep(false)
-                .translation(Vector::new(0.0, 0.0, object.shape.rest_height() as f32)),
+                .additional_mass_properties(object.mass_properties())
+                .translation(Vector::new(0.0, 0.0, object.rest_height() as f32)),
         );
         let collider = t.colliders.insert_with_parent(
             object
                 .shape
                 .collider()
-                .mass(object.mass as f32)
+                .density(0.0)
                 .friction(object.friction as f32)
                 .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(InteractionGroups::new(
@@ -684,7 +712,7 @@ impl HandSim {
             Vector3::new(
                 scene.object_xy[0],
                 scene.object_xy[1],
-                self.object.shape.rest_height(),
+                self.object.rest_height(),
             )
             .into(),
             rot,
@@ -878,7 +906,8 @@ impl HandSim {
         true
     }
 
-    /// The object's centre (m).
+    /// The object body's origin in the world (m): the centre of its bounding box (see
+    /// [`super::object`]); `rest_height()` above the table top when it rests upright.
     pub fn object_position(&self) -> Vector3<f64> {
         self.sets
             .bodies
@@ -909,6 +938,13 @@ impl HandSim {
                 ]
             })
             .unwrap_or([f32::NAN; 7])
+    }
+
+    /// Tilt of the object (rad): the angle between its body z axis and the world z axis.
+    pub fn object_tilt(&self) -> f64 {
+        let [_, _, _, x, y, _, _] = self.object_pose_raw().map(f64::from);
+        // z component of the rotated z axis: 1 - 2 (x^2 + y^2).
+        (1.0 - 2.0 * (x * x + y * y)).clamp(-1.0, 1.0).acos()
     }
 
     /// Height of the object's lowest point above the table top (m).
@@ -1118,7 +1154,7 @@ mod tests {
         // The force calibration behind the tactile threshold: impulse / dt = m g.
         let robot = Robot::builtin(Side::Left);
         let obj = ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.8);
-        let mut sim = HandSim::new(&robot, obj, SimConfig::default()).unwrap();
+        let mut sim = HandSim::new(&robot, obj.clone(), SimConfig::default()).unwrap();
         // Hand far above the object.
         sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.3, 0.0))
             .unwrap();
@@ -1134,7 +1170,7 @@ mod tests {
     fn reset_writes_the_start_posture_and_placement() {
         let robot = Robot::builtin(Side::Left);
         let obj = ObjectSpec::default_box();
-        let mut sim = HandSim::new(&robot, obj, SimConfig::default()).unwrap();
+        let mut sim = HandSim::new(&robot, obj.clone(), SimConfig::default()).unwrap();
         let start = Posture::CShape.angles();
         let scene = Scene::above(&obj, start, 0.05, 0.4);
         sim.reset(&scene).unwrap();
