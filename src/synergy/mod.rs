@@ -1,5 +1,7 @@
 //! Hand synergies (Sec. III of the paper): pose datasets and their principal components.
 //!
+//! - [`collect`]: `grasp pca collect`, grasp postures of the GRASP taxonomy made in the
+//!   simulator.
 //! - [`dataset`]: CSV pose datasets of the 22 finger joints, validated against the joint
 //!   limits, with precise errors (file, line, column).
 //! - [`pca`]: [`SynergyModel`], the PCA of a dataset (mean, components, the full
@@ -12,6 +14,7 @@
 //! All joint vectors are `[f64; 22]` in the synergy order of
 //! [`FINGER_JOINTS`], in radians.
 
+pub mod collect;
 pub mod dataset;
 pub mod draw;
 pub mod map;
@@ -26,6 +29,22 @@ use crate::robot::Side;
 
 /// Number of finger joints in the synergy space.
 pub const N_FINGER_JOINTS: usize = FINGER_JOINTS.len();
+
+/// The shipped synergy model's JSON (`assets/synergy/model.json`, see its README).
+pub const DEFAULT_MODEL_JSON: &str = include_str!("../../assets/synergy/model.json");
+
+/// The shipped synergy model: 10 components fitted to the 3000 postures of
+/// `assets/synergy/poses.csv` made by `grasp pca collect` (see `assets/synergy/README.md`).
+/// Take the paper's `n` in {3, 5, 8, 10} with [`SynergyModel::truncated`].
+pub fn default_model() -> SynergyModel {
+    // The embedded file is generated and tested (tests/pca_collect.rs): failing here is a
+    // build defect, not a user error.
+    SynergyModel::from_json(
+        std::path::Path::new("assets/synergy/model.json"),
+        DEFAULT_MODEL_JSON,
+    )
+    .unwrap_or_else(|e| panic!("the shipped synergy model is invalid: {e}"))
+}
 
 /// Lower and upper limits (radians) of the 22 finger joints of `side`, in
 /// [`FINGER_JOINTS`] order, read from [`hand_facts`]. Both hands have the same limits.
@@ -44,6 +63,16 @@ pub fn finger_limits(side: Side) -> [(f64, f64); N_FINGER_JOINTS] {
 #[allow(clippy::approx_constant)] // the published joint limits (0.7854, 1.0472, ...)
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_default_model_has_ten_components() {
+        let m = default_model();
+        assert_eq!(m.n_components(), 10);
+        assert!(m.explained_variance_ratio()[0] > 0.3);
+        for n in PAPER_COMPONENTS {
+            assert_eq!(m.truncated(n).unwrap().n_components(), n);
+        }
+    }
 
     #[test]
     fn finger_limits_follow_the_joint_table() {

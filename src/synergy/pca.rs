@@ -38,6 +38,14 @@ pub enum SynergyError {
         /// The number asked for.
         n: usize,
     },
+    /// A truncation asked for more components than the model has (or for none).
+    #[error("cannot keep {requested} component(s) of a model with {available}: expected 1 to {available}")]
+    TooFewComponents {
+        /// Components asked for.
+        requested: usize,
+        /// Components in the model.
+        available: usize,
+    },
     /// Too few samples for the requested fit.
     #[error("{samples} sample(s) cannot fit {n} component(s): need at least {required}")]
     TooFewSamples {
@@ -277,6 +285,24 @@ impl SynergyModel {
     pub fn with_source(mut self, source: impl Into<String>) -> Self {
         self.source = source.into();
         self
+    }
+
+    /// The model with only its first `n` components (and their projection ranges): the
+    /// PCA with `n` components of the same data, since components are sorted by
+    /// descending eigenvalue. The eigenvalue spectrum, mean and source are kept. Fails
+    /// unless `1 <= n <= self.n_components()`.
+    pub fn truncated(&self, n: usize) -> Result<SynergyModel, SynergyError> {
+        if n == 0 || n > self.components.len() {
+            return Err(SynergyError::TooFewComponents {
+                requested: n,
+                available: self.components.len(),
+            });
+        }
+        let mut m = self.clone();
+        m.components.truncate(n);
+        m.projection_min.truncate(n);
+        m.projection_max.truncate(n);
+        Ok(m)
     }
 
     /// Number of components `n` (the dimension of the synergy space).
@@ -586,6 +612,25 @@ pub(crate) mod tests {
         assert_relative_eq!(model.projection_max()[1], 0.1, epsilon = 1e-12);
         assert_eq!(model.n_samples(), 4);
         assert_eq!(model.n_components(), 3);
+    }
+
+    #[test]
+    fn truncation_equals_a_smaller_fit() {
+        let full = SynergyModel::fit(&known_rows(), 3).unwrap();
+        let small = SynergyModel::fit(&known_rows(), 2).unwrap();
+        let t = full.truncated(2).unwrap();
+        assert_eq!(t, small);
+        assert_eq!(t.n_components(), 2);
+        assert_eq!(t.projection_min().len(), 2);
+        assert_eq!(full.truncated(3).unwrap(), full);
+        assert!(matches!(
+            full.truncated(4),
+            Err(SynergyError::TooFewComponents {
+                requested: 4,
+                available: 3
+            })
+        ));
+        assert!(full.truncated(0).is_err());
     }
 
     /// Agreement with scikit-learn 1.9 (`PCA(svd_solver="full")`) on the committed fixture
