@@ -25,11 +25,7 @@ fn collect(out: &Path, extra: &[&str]) -> Output {
     ];
     args.extend_from_slice(extra);
     let o = grasp(&args);
-    assert!(
-        o.status.success(),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     o
 }
 
@@ -59,7 +55,11 @@ fn collect_writes_a_dataset_that_fit_accepts_and_is_reproducible() {
         for (j, c) in cells[..22].iter().enumerate() {
             let v: f64 = c.parse().unwrap();
             let (lo, hi) = limits[j];
-            assert!(v >= lo && v <= hi, "{} = {v} outside [{lo}, {hi}]", header[j]);
+            assert!(
+                v >= lo && v <= hi,
+                "{} = {v} outside [{lo}, {hi}]",
+                header[j]
+            );
         }
         types.insert(cells[22].to_string());
         rows += 1;
@@ -121,7 +121,14 @@ fn collect_json_reports_the_statistics() {
 fn collect_bad_inputs_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.csv");
-    let o = grasp(&["pca", "collect", "--samples", "0", "--out", out.to_str().unwrap()]);
+    let o = grasp(&[
+        "pca",
+        "collect",
+        "--samples",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--samples"));
     let missing = dir.path().join("missing.toml");

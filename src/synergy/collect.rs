@@ -911,6 +911,9 @@ impl Collection {
     }
 }
 
+/// A finished sample: grasp type index, posture, its attempts.
+type SampleResult = (usize, [f64; N_FINGER_JOINTS], CollectStats);
+
 /// Outcome of one attempt.
 enum Attempt {
     Pose([f64; N_FINGER_JOINTS]),
@@ -1049,8 +1052,7 @@ pub fn collect(
     cfg.validate().map_err(SimError::from)?;
     let types = grasp_types();
     let checker = SelfCollision::new(robot);
-    let results: Vec<Result<(usize, [f64; N_FINGER_JOINTS], CollectStats), CollectError>> = (0
-        ..opts.samples)
+    let results: Vec<Result<SampleResult, CollectError>> = (0..opts.samples)
         .into_par_iter()
         .map(|i| {
             let mut st = CollectStats::default();
