@@ -4,9 +4,11 @@
 use clap::{Args, Parser, Subcommand};
 
 mod bench;
+mod eval;
 mod objects;
 mod pca;
 mod robot;
+mod rollout;
 mod sim;
 
 /// Flags shared by every subcommand.
@@ -50,6 +52,10 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// List, inspect and export the objects to grasp.
     Objects(objects::ObjectsArgs),
+    /// Run baselines or a random agent on the grasping MDP, episode by episode.
+    Rollout(rollout::RolloutArgs),
+    /// Per-object success rates of policies and baselines (the paper's Table I).
+    Eval(eval::EvalArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -80,6 +86,8 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Pca(a) => pca::run(a, &global),
         Command::Sim(a) => sim::run(a, &global),
         Command::Bench(a) => bench::run(a, &global),
+        Command::Rollout(a) => rollout::run(a, &global),
+        Command::Eval(a) => eval::run(a, &global),
         Command::Objects(a) => objects::run(a, &global),
     }
 }

@@ -28,6 +28,9 @@ use crate::synergy::SynergyModel;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
+/// Most 5 mm steps a reset raises the hand to start clear of the object.
+const CLEARANCE_STEPS: usize = 20;
+
 /// Settings of the grasping MDP.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -269,7 +272,16 @@ impl GraspEnv {
         let mut scene = Scene::above(&self.objects[k].1, self.start, self.cfg.z_offset, 0.0);
         scene.object_xy = [p.dx, p.dy];
         scene.object_yaw = p.dyaw;
+        // The hand starts clear of the object: where the start posture would overlap a
+        // large object, the hand is raised in 5 mm steps (at most 10 cm).
         self.sim.reset(&scene)?;
+        for _ in 0..CLEARANCE_STEPS {
+            if !self.sim.hand_overlaps_object() {
+                break;
+            }
+            scene.grasp_point[2] += 0.005;
+            self.sim.reset(&scene)?;
+        }
         self.steps = 0;
         self.episode_return = 0.0;
         self.touched_in_stage1 = false;

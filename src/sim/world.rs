@@ -947,6 +947,39 @@ impl HandSim {
         (1.0 - 2.0 * (x * x + y * y)).clamp(-1.0, 1.0).acos()
     }
 
+    /// World pose of a collider from its parent body's pose (valid right after a reset,
+    /// before the first step has synchronised the collider positions).
+    fn collider_world_pose(&self, h: ColliderHandle) -> Option<Pose> {
+        let c = self.sets.colliders.get(h)?;
+        let local = c.position_wrt_parent().copied().unwrap_or(Pose::IDENTITY);
+        let body = self.sets.bodies.get(c.parent()?)?;
+        Some(*body.position() * local)
+    }
+
+    /// Whether any hand collider overlaps the object in the current configuration (exact
+    /// shape intersection tests). Used after a reset so that the hand starts clear of the
+    /// object instead of inside it.
+    pub fn hand_overlaps_object(&self) -> bool {
+        let (Some(obj), Some(obj_pose)) = (
+            self.sets.colliders.get(self.object_collider),
+            self.collider_world_pose(self.object_collider),
+        ) else {
+            return false;
+        };
+        self.hand_colliders.iter().any(|&h| {
+            match (self.sets.colliders.get(h), self.collider_world_pose(h)) {
+                (Some(c), Some(pose)) => rapier3d::parry::query::intersection_test(
+                    &pose,
+                    c.shape(),
+                    &obj_pose,
+                    obj.shape(),
+                )
+                .is_ok_and(|i| i.intersecting),
+                _ => false,
+            }
+        })
+    }
+
     /// Height of the object's lowest point above the table top (m).
     pub fn object_lowest_z(&self) -> f64 {
         self.sets

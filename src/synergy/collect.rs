@@ -184,7 +184,8 @@ impl SizeClass {
             }
         };
         let mass = u(0.05, 0.5);
-        ObjectSpec::with_density(shape, mass / shape.volume(), 0.8)
+        let volume = shape.volume();
+        ObjectSpec::with_density(shape, mass / volume, 0.8)
     }
 }
 
@@ -957,7 +958,7 @@ fn attempt(
     let yaw = rng.random_range(-PI..PI);
     let clearance = rng.random_range(0.005..0.02);
     let z = z_offset_for(robot, &pre, &object, clearance);
-    let mut sim = HandSim::new(robot, object, cfg.clone())?;
+    let mut sim = HandSim::new(robot, object.clone(), cfg.clone())?;
     sim.reset(&Scene::above(&object, pre, z, yaw))?;
     let start = sim.targets();
     let per = (0.1 / cfg.dt).round().max(1.0) as usize;
