@@ -171,3 +171,34 @@ fn scripted_grasp_holds_some_objects_and_drops_others() {
         outcomes.len()
     );
 }
+
+fn grasp_cli(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn sim_cli_takes_library_objects_and_suggests_names() {
+    let (ok, out, err) = grasp_cli(&["sim", "--object", "can_soup", "--close", "--lift", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["object"]["name"], "can_soup");
+    assert_eq!(v["object"]["shape"]["kind"], "library");
+    assert_eq!(v["lift"]["success"], true, "{out}");
+    let (ok, _, err) = grasp_cli(&["sim", "--object", "can_sop"]);
+    assert!(!ok);
+    assert!(err.contains("did you mean can_soup"), "{err}");
+    let (ok, _, err) = grasp_cli(&["sim", "--object", "train"]);
+    assert!(!ok);
+    assert!(err.contains("61 objects"), "{err}");
+    let (ok, _, err) = grasp_cli(&["sim", "--object", "/nonexistent/x.obj"]);
+    assert!(!ok);
+    assert!(err.contains("/nonexistent/x.obj"), "{err}");
+}
