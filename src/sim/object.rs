@@ -19,8 +19,20 @@
 //! solids; library objects keep the centre of mass and inertia the library computed from
 //! the visual mesh (not from the hulls, whose union overestimates the volume). Changing
 //! [`ObjectSpec::mass`] scales the inertia with it.
+//!
+//! # Support feet
+//! parry 0.31 builds the contact manifold of a convex polyhedron from at most the FIRST
+//! four vertices of its support face (`ConvexPolyhedron::local_support_feature`, a TODO
+//! there): a can's 48-sided bottom touches the table along one short arc only, and a
+//! resting can slid 7 mm and tilted in 2 s. So every polyhedral face with more than four
+//! vertices gets a thin convex "foot" inside the hull ([`support_feet`]): the hull of the
+//! face's four vertices extreme along two in-face axes and the same four moved 1 mm toward
+//! the hull's centre. The foot's outer face is a quadrilateral in the face's plane that
+//! spans the face, so the face is supported over its whole extent; the foot lies inside the
+//! hull (convex combinations of hull points), so the object's outer geometry is unchanged.
 
 use crate::objects::{Object, ObjectError as LibraryError, Primitive};
+use rapier3d::parry::shape::ConvexPolyhedron;
 use rapier3d::prelude::{ColliderBuilder, MassProperties, Pose, SharedShape, Vector};
 use serde::Serialize;
 use std::sync::Arc;
@@ -82,8 +94,10 @@ pub enum ObjectShape {
         /// The collision pieces (not serialised; `part_count` says how many).
         #[serde(skip)]
         parts: ConvexParts,
-        /// Number of convex pieces.
+        /// Number of convex pieces (hulls and support feet).
         part_count: usize,
+        /// How many of the pieces are support feet (see the module docs).
+        support_feet: usize,
         /// Half extents of the bounding box of the visual mesh (m).
         half: [f64; 3],
         /// Centre of mass in the body frame (m).
@@ -92,6 +106,10 @@ pub enum ObjectShape {
         unit_inertia: [[f64; 3]; 3],
         /// Volume of the solid (m^3).
         volume: f64,
+        /// The library's object frame in the body frame: translation (m) and unit
+        /// quaternion (x, y, z, w); `p_body = R p_library + t` (today R is the identity and
+        /// t = minus the bounding-box centre).
+        body_from_library: ([f64; 3], [f64; 4]),
     },
 }
 
@@ -158,6 +176,59 @@ impl ObjectShape {
             }
         }
     }
+}
+
+/// Thin convex feet supporting the faces of `poly` that have more than four vertices (see
+/// the module docs), in the polyhedron's frame. Thickness 1 mm (at most half the distance
+/// from a vertex to the centre).
+pub fn support_feet(poly: &ConvexPolyhedron) -> Vec<SharedShape> {
+    let pts = poly.points();
+    if pts.is_empty() {
+        return Vec::new();
+    }
+    let centre = pts.iter().copied().sum::<Vector>() / pts.len() as f32;
+    let adj = poly.vertices_adj_to_face();
+    let mut feet = Vec::new();
+    for face in poly.faces() {
+        let (first, n) = (
+            face.first_vertex_or_edge as usize,
+            face.num_vertices_or_edges as usize,
+        );
+        let Some(ids) = adj.get(first..first + n) else {
+            continue;
+        };
+        if n <= 4 {
+            continue;
+        }
+        let u = face.normal.any_orthonormal_vector();
+        let v = face.normal.cross(u);
+        let mut chosen: Vec<u32> = Vec::with_capacity(4);
+        for (axis, sign) in [(u, 1.0f32), (v, 1.0), (u, -1.0), (v, -1.0)] {
+            let best = ids.iter().copied().max_by(|a, b| {
+                let da = sign * axis.dot(pts[*a as usize]);
+                let db = sign * axis.dot(pts[*b as usize]);
+                da.total_cmp(&db)
+            });
+            if let Some(b) = best.filter(|b| !chosen.contains(b)) {
+                chosen.push(b);
+            }
+        }
+        if chosen.len() < 3 {
+            continue;
+        }
+        let mut foot: Vec<Vector> = Vec::with_capacity(2 * chosen.len());
+        for id in &chosen {
+            let p = pts[*id as usize];
+            let to_centre = centre - p;
+            let t = (1e-3 / to_centre.length().max(1e-9)).min(0.5);
+            foot.push(p);
+            foot.push(p + to_centre * t);
+        }
+        if let Some(shape) = SharedShape::convex_hull(&foot) {
+            feet.push(shape);
+        }
+    }
+    feet
 }
 
 /// An object to simulate: its name, shape, mass and friction.
@@ -232,24 +303,35 @@ impl ObjectSpec {
         let (lo, hi) = (object.bbox.min, object.bbox.max);
         let c = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
         let shift = Pose::translation(-c[0] as f32, -c[1] as f32, -c[2] as f32);
-        let parts: Vec<(Pose, SharedShape)> = object
+        let mut parts: Vec<(Pose, SharedShape)> = object
             .collider_parts()?
             .into_iter()
             .map(|(pose, shape)| (shift * pose, shape))
             .collect();
+        let mut feet = Vec::new();
+        for (pose, shape) in &parts {
+            if let Some(poly) = shape.as_convex_polyhedron() {
+                feet.extend(support_feet(poly).into_iter().map(|f| (*pose, f)));
+            }
+        }
+        let support_feet = feet.len();
+        parts.extend(feet);
         let half = object.bbox.extents().map(|e| 0.5 * e);
         let com = [0, 1, 2].map(|k| object.com[k] - c[k]);
         let m = object.mass_kg;
         let unit_inertia = object.inertia.map(|row| row.map(|v| v / m));
+        let body_from_library = ([-c[0], -c[1], -c[2]], [0.0, 0.0, 0.0, 1.0]);
         Ok(ObjectSpec {
             name: object.name.clone(),
             shape: ObjectShape::Library {
                 part_count: parts.len(),
+                support_feet,
                 parts: ConvexParts(Arc::new(parts)),
                 half,
                 com,
                 unit_inertia,
                 volume: object.volume_m3,
+                body_from_library,
             },
             mass: m,
             friction: object.friction,
@@ -461,7 +543,7 @@ mod tests {
         else {
             panic!("not a library shape")
         };
-        assert_eq!(*part_count, o.hulls.len());
+        assert!(*part_count >= o.hulls.len());
         // The centre of mass moved with the frame: object-frame z minus half the height.
         let h = o.bbox.extents()[2];
         assert!((com[2] - (o.com[2] - 0.5 * h)).abs() < 1e-12);
@@ -474,5 +556,50 @@ mod tests {
         let (a, b) = (s.mass_properties(), heavy.mass_properties());
         let ratio = b.principal_inertia().x / a.principal_inertia().x;
         assert!((ratio - 2.0).abs() < 1e-4, "{ratio}");
+    }
+
+    #[test]
+    fn large_faces_get_feet_spanning_them_inside_the_hull() {
+        // A 12-sided prism, radius 3 cm, 0 <= z <= 4 cm: two 12-vertex faces, quads around.
+        let mut pts = Vec::new();
+        for k in 0..12 {
+            let a = k as f32 * std::f32::consts::TAU / 12.0;
+            for z in [0.0, 0.04] {
+                pts.push(Vector::new(0.03 * a.cos(), 0.03 * a.sin(), z));
+            }
+        }
+        let hull = SharedShape::convex_hull(&pts).unwrap();
+        let poly = hull.as_convex_polyhedron().unwrap();
+        let feet = support_feet(poly);
+        assert_eq!(feet.len(), 2);
+        for f in &feet {
+            let a = f.compute_aabb(&Pose::IDENTITY);
+            // Inside the prism's box, spanning most of the 6 cm face (a square inscribed in
+            // the circle is 4.2 cm wide), 1 mm thick at most.
+            assert!(a.mins.z >= -1e-6 && a.maxs.z <= 0.04 + 1e-6, "{a:?}");
+            assert!(a.maxs.x - a.mins.x > 0.04, "{a:?}");
+            assert!(a.maxs.y - a.mins.y > 0.04, "{a:?}");
+            let thick = (a.maxs.z - a.mins.z).min(0.04 - (a.maxs.z - a.mins.z));
+            assert!(thick < 1.1e-3, "{a:?}");
+        }
+        // One foot lies on the bottom face (z = 0), one on the top face.
+        let lows: Vec<f32> = feet
+            .iter()
+            .map(|f| f.compute_aabb(&Pose::IDENTITY).mins.z)
+            .collect();
+        assert!(lows.iter().any(|z| z.abs() < 1e-6), "{lows:?}");
+        // A box (quadrilateral faces only) needs no feet.
+        let cube = SharedShape::convex_hull(&[
+            Vector::new(0.0, 0.0, 0.0),
+            Vector::new(1.0, 0.0, 0.0),
+            Vector::new(0.0, 1.0, 0.0),
+            Vector::new(1.0, 1.0, 0.0),
+            Vector::new(0.0, 0.0, 1.0),
+            Vector::new(1.0, 0.0, 1.0),
+            Vector::new(0.0, 1.0, 1.0),
+            Vector::new(1.0, 1.0, 1.0),
+        ])
+        .unwrap();
+        assert!(support_feet(cube.as_convex_polyhedron().unwrap()).is_empty());
     }
 }
