@@ -3,8 +3,8 @@
 //! An episode:
 //! 1. **reset**: an object is drawn from the set, its start pose perturbed by the
 //!    curriculum (eq. 6); the hand is placed above it for a top-down grasp in the start
-//!    posture (grasp point = TH/LF fingertip midpoint at the object's centre plus
-//!    `z_offset`);
+//!    posture (grasp point = TH/LF fingertip midpoint `grasp_depth` below the object's
+//!    top, never below its centre);
 //! 2. **stage 1**: the hand follows the human-like closing trajectory T (joint-space
 //!    interpolation with a smooth profile from the start posture to a power grasp) until
 //!    ANY fingertip touches the object or T ends;
@@ -43,8 +43,9 @@ pub struct EnvConfig {
     pub max_steps: usize,
     /// Start posture: `open` or `c-shape`.
     pub start_posture: String,
-    /// Height of the grasp point above the object's centre (m).
-    pub z_offset: f64,
+    /// Depth of the grasp point (TH/LF fingertip midpoint) below the object's top (m),
+    /// never below its centre: the hand starts above the object, offset along z.
+    pub grasp_depth: f64,
     /// Duration of the stage-1 closing trajectory T (s).
     pub closing_time: f64,
     /// Period at which stage 1 updates targets and checks the tactile sensors (s).
@@ -61,8 +62,8 @@ impl Default for EnvConfig {
             modality: Modality::M3,
             history: 3,
             max_steps: 20,
-            start_posture: "c-shape".into(),
-            z_offset: 0.01,
+            start_posture: "open".into(),
+            grasp_depth: 0.01,
             closing_time: 1.5,
             closing_period: 0.02,
             action: ActionConfig::default(),
@@ -103,10 +104,10 @@ impl EnvConfig {
         if self.max_steps == 0 {
             return bad("max_steps", "must be at least 1".into());
         }
-        if !(self.z_offset.is_finite() && self.z_offset.abs() <= 0.2) {
+        if !(self.grasp_depth.is_finite() && (0.0..=0.2).contains(&self.grasp_depth)) {
             return bad(
-                "z_offset",
-                format!("{} is outside [-0.2, 0.2] m", self.z_offset),
+                "grasp_depth",
+                format!("{} is outside [0, 0.2] m", self.grasp_depth),
             );
         }
         if !(self.closing_time > 0.0 && self.closing_time <= 10.0) {
@@ -269,7 +270,7 @@ impl GraspEnv {
             self.current_object = k;
         }
         let p = self.curriculum.sample(&mut rng);
-        let mut scene = Scene::above(&self.objects[k].1, self.start, self.cfg.z_offset, 0.0);
+        let mut scene = Scene::top_down(&self.objects[k].1, self.start, self.cfg.grasp_depth, 0.0);
         scene.object_xy = [p.dx, p.dy];
         scene.object_yaw = p.dyaw;
         // The hand starts clear of the object: where the start posture would overlap a
