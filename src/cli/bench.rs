@@ -24,6 +24,26 @@ pub enum BenchCommand {
         after_help = "Examples:\n  grasp bench sim\n  grasp bench sim --envs 20 --seconds 10 --json"
     )]
     Sim(BenchSimArgs),
+    /// Grasping-environment throughput: --envs environments with a random agent stepped
+    /// in one VecEnv (the learner's harness), environment steps per second.
+    #[command(after_help = "Example:\n  grasp bench env --envs 20 --seconds 20 --json")]
+    Env(BenchEnvArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchEnvArgs {
+    /// Objects the environments draw from.
+    #[arg(long, default_value = "train")]
+    pub objects: String,
+    /// Environments stepped in parallel.
+    #[arg(long, default_value_t = 20)]
+    pub envs: usize,
+    /// Threads of the pool (default: available cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Wall seconds to measure.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
 }
 
 #[derive(Debug, Args)]
@@ -45,6 +65,7 @@ pub struct BenchSimArgs {
 pub fn run(a: BenchArgs, g: &Global) -> Result<()> {
     match a.command {
         BenchCommand::Sim(a) => sim(a, g),
+        BenchCommand::Env(a) => env(a, g),
     }
 }
 
@@ -91,5 +112,77 @@ fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
     row(&one);
     row(&many);
     println!("reference: MuJoCo steps the Shadow hand with a block at 55-78 simulated s per wall s on one core");
+    Ok(())
+}
+
+fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
+    use grasp::env::api::{Action, Env, VecEnv};
+    use grasp::env::grasp::{EnvConfig, GraspEnv};
+    use rand::SeedableRng;
+    use rand_distr::Distribution;
+    if a.envs == 0 || !(a.seconds > 0.0 && a.seconds.is_finite()) {
+        anyhow::bail!("--envs must be at least 1 and --seconds positive");
+    }
+    let robot = Robot::builtin(Side::Left);
+    let model = super::rollout::load_synergy(None, 5)?;
+    let objects = super::rollout::sim_objects(&a.objects)?;
+    let threads = super::rollout::threads(a.threads);
+    let envs = (0..a.envs)
+        .map(|_| -> Result<Box<dyn Env>> {
+            Ok(Box::new(GraspEnv::new(
+                &robot,
+                objects.clone(),
+                model.clone(),
+                SimConfig::default(),
+                EnvConfig::default(),
+            )?))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut venv = VecEnv::new(envs, threads, g.seed.unwrap_or(0))?;
+    let n = venv.action_spec().continuous;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(g.seed.unwrap_or(0));
+    let start = std::time::Instant::now();
+    venv.reset(g.seed.unwrap_or(0))?;
+    let (mut steps, mut episodes) = (0u64, 0u64);
+    while start.elapsed().as_secs_f64() < a.seconds {
+        let actions: Vec<Action> = (0..a.envs)
+            .map(|_| Action {
+                cont: (0..n)
+                    .map(|_| rand_distr::StandardNormal.sample(&mut rng))
+                    .collect(),
+                lift: rand::Rng::random_bool(&mut rng, 0.15),
+            })
+            .collect();
+        let s = venv.step(&actions)?;
+        steps += a.envs as u64;
+        episodes += s
+            .terminated
+            .iter()
+            .zip(&s.truncated)
+            .filter(|(t, u)| **t || **u)
+            .count() as u64;
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let out = serde_json::json!({
+        "envs": a.envs,
+        "threads": threads,
+        "objects": a.objects,
+        "env_steps": steps,
+        "episodes": episodes,
+        "wall_s": wall,
+        "env_steps_per_s": steps as f64 / wall,
+        "episodes_per_s": episodes as f64 / wall,
+    });
+    if g.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        println!(
+            "grasp env, random agent, {} envs on {threads} threads, objects {}: {:.1} env steps/s, {:.2} episodes/s ({steps} steps, {episodes} episodes in {wall:.1} s; reset and stage 1 included)",
+            a.envs,
+            a.objects,
+            steps as f64 / wall,
+            episodes as f64 / wall
+        );
+    }
     Ok(())
 }
