@@ -23,4 +23,5 @@ pub mod ppo;
 pub mod robot;
 pub mod sim;
 pub mod synergy;
+pub mod train;
 pub mod util;

@@ -8,6 +8,7 @@ mod objects;
 mod pca;
 mod robot;
 mod sim;
+mod train;
 
 /// Flags shared by every subcommand.
 #[derive(Debug, Clone, Args)]
@@ -50,6 +51,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// List, inspect and export the objects to grasp.
     Objects(objects::ObjectsArgs),
+    /// Train a policy with PPO from a config file into a run folder.
+    Train(train::TrainArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -81,5 +84,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Sim(a) => sim::run(a, &global),
         Command::Bench(a) => bench::run(a, &global),
         Command::Objects(a) => objects::run(a, &global),
+        Command::Train(a) => train::run(a, &global),
     }
 }
