@@ -239,6 +239,19 @@ fn grasp_env_with_primitives_runs_one_update() {
     let latest = run.join("checkpoints/latest");
     assert!(latest.join("checkpoint.safetensors").is_file());
     SynergyModel::load(&latest.join("synergy.json")).unwrap();
+
+    // The model is truncated to fewer components; more than it has is an error.
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    let few = write(tmp.path(), "g3.toml", &format!("n_components = 8\n{text}"));
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&few),
+        "--out",
+        s(&tmp.path().join("r8")),
+    ]);
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(!e.status.success() && err.contains("at least 8"), "{err}");
 }
 
 #[test]

@@ -96,7 +96,6 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&summary)?);
     } else if !g.quiet {
         let fmt = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |x| format!("{x:.3}"));
-        let last = summary.last.as_ref();
         let why = match summary.stop {
             StopReason::Completed => "completed",
             StopReason::TimeBudget => "time budget reached",
@@ -109,8 +108,8 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
             summary.global_step,
             summary.episodes,
             summary.wall_s,
-            fmt(last.and_then(|r| r.success_rate)),
-            fmt(last.and_then(|r| r.episode_return)),
+            fmt(summary.last_success_rate),
+            fmt(summary.last_return),
             fmt(summary.best_score),
             summary.run_dir.display()
         );

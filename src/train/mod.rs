@@ -66,10 +66,10 @@ pub enum TrainError {
     /// The synergy model could not be loaded.
     #[error(transparent)]
     Synergy(#[from] crate::synergy::SynergyError),
-    /// The synergy model has another number of components than the config asks for.
+    /// The synergy model has fewer components than the config asks for.
     #[error(
         "synergy model {path} has {found} components but the config asks for \
-         n_components = {wanted}: fit a model with {wanted} components"
+         n_components = {wanted}: fit a model with at least {wanted} components"
     )]
     SynergyComponents {
         /// The model file.

@@ -5,13 +5,15 @@ use crate::sim::{ObjectShape, ObjectSpec};
 /// The `"primitives"` set: eight boxes and cylinders of varied sizes (2-7 cm across,
 /// 6-10 cm tall), masses (80-200 g) and frictions (0.55-0.95), all graspable by the hand.
 pub fn primitives() -> Vec<(String, ObjectSpec)> {
-    let cyl = |radius: f64, half_height: f64, mass: f64, friction: f64| ObjectSpec {
-        shape: ObjectShape::Cylinder {
+    let cyl = |radius: f64, half_height: f64, mass: f64, friction: f64| {
+        let mut s = ObjectSpec::default_cylinder();
+        s.shape = ObjectShape::Cylinder {
             radius,
             half_height,
-        },
-        mass,
-        friction,
+        };
+        s.mass = mass;
+        s.friction = friction;
+        s
     };
     vec![
         (

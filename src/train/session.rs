@@ -92,21 +92,47 @@ impl Env for ProbedGrasp {
     }
 }
 
-/// Loads the synergy model of `cfg`, checking that it exists and has `n_components`.
+/// Loads the synergy model of `cfg`, checking that it exists, keeping its first
+/// `n_components` components (a model with fewer is an error).
 pub fn load_synergy(cfg: &TrainConfig) -> Result<SynergyModel, TrainError> {
     let path = &cfg.synergy;
     if !path.exists() {
         return Err(TrainError::SynergyMissing { path: path.clone() });
     }
     let model = SynergyModel::load(path)?;
-    if model.n_components() != cfg.n_components {
+    if model.n_components() < cfg.n_components {
         return Err(TrainError::SynergyComponents {
             path: path.clone(),
             found: model.n_components(),
             wanted: cfg.n_components,
         });
     }
-    Ok(model)
+    truncate_model(path, &model, cfg.n_components)
+}
+
+/// The model with only its first `n` components (and their projection ranges), which is
+/// the PCA with `n` components of the same data since components are sorted by descending
+/// eigenvalue. Done through the model's JSON form, which `SynergyModel::from_json`
+/// validates again.
+fn truncate_model(path: &Path, model: &SynergyModel, n: usize) -> Result<SynergyModel, TrainError> {
+    if model.n_components() == n {
+        return Ok(model.clone());
+    }
+    let bad = |message: String| TrainError::ConfigValue {
+        path: path.to_path_buf(),
+        field: "synergy".into(),
+        message,
+    };
+    let mut v: serde_json::Value =
+        serde_json::from_str(&model.to_json()).map_err(|e| bad(e.to_string()))?;
+    for key in ["components", "projection_min", "projection_max"] {
+        match v.get_mut(key).and_then(|a| a.as_array_mut()) {
+            Some(a) => a.truncate(n),
+            None => return Err(bad(format!("the model JSON has no `{key}` array"))),
+        }
+    }
+    let text = serde_json::to_string(&v).map_err(|e| bad(e.to_string()))?;
+    Ok(SynergyModel::from_json(path, &text)?)
 }
 
 type Built = (
@@ -197,6 +223,10 @@ pub struct TrainSummary {
     pub episodes: u64,
     /// The last metrics row.
     pub last: Option<MetricsRow>,
+    /// The most recent success rate recorded (updates where no episode ended have none).
+    pub last_success_rate: Option<f64>,
+    /// The most recent mean episode return recorded.
+    pub last_return: Option<f64>,
     /// Best windowed score so far (success rate, or return without success).
     pub best_score: Option<f64>,
     /// Why it stopped.
@@ -459,7 +489,55 @@ impl TrainSession {
             best_score: self.best,
             stop,
             wall_s: last.as_ref().map_or(self.wall_offset, |r| r.wall_s),
+            last_success_rate: self.rows.iter().rev().find_map(|r| r.success_rate),
+            last_return: self.rows.iter().rev().find_map(|r| r.episode_return),
             last,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Posture;
+    use crate::sim::script;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn truncation_keeps_the_leading_components() {
+        let robot = Robot::builtin(Side::Left);
+        let lim = robot.finger_limits();
+        let (a, b) = (Posture::CShape.angles(), script::power_grasp());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let rows: Vec<[f64; 22]> = (0..200)
+            .map(|_| {
+                let t: f64 = rng.random();
+                std::array::from_fn(|k| {
+                    (a[k + 2] + t * (b[k + 2] - a[k + 2]) + rng.random_range(-0.05..0.05))
+                        .clamp(lim[k].0, lim[k].1)
+                })
+            })
+            .collect();
+        let m5 = SynergyModel::fit(&rows, 5).unwrap();
+        let m3 = truncate_model(Path::new("m.json"), &m5, 3).unwrap();
+        assert_eq!(m3.n_components(), 3);
+        // The JSON round trip may move a value by one ulp.
+        let close = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+        };
+        for k in 0..3 {
+            assert!(
+                close(&m3.components()[k], &m5.components()[k]),
+                "component {k}"
+            );
+        }
+        assert!(close(m3.projection_min(), &m5.projection_min()[..3]));
+        assert!(close(m3.projection_max(), &m5.projection_max()[..3]));
+        assert!(close(m3.eigenvalues(), m5.eigenvalues()));
+        let fit3 = SynergyModel::fit(&rows, 3).unwrap();
+        for (x, y) in fit3.components().iter().zip(m3.components()) {
+            let dot: f64 = x.iter().zip(y).map(|(p, q)| p * q).sum();
+            assert!((dot.abs() - 1.0).abs() < 1e-9, "{dot}");
+        }
     }
 }
