@@ -25,4 +25,5 @@ pub mod ppo;
 pub mod robot;
 pub mod sim;
 pub mod synergy;
+pub mod train;
 pub mod util;

@@ -10,6 +10,7 @@ mod pca;
 mod robot;
 mod rollout;
 mod sim;
+mod train;
 
 /// Flags shared by every subcommand.
 #[derive(Debug, Clone, Args)]
@@ -56,6 +57,8 @@ pub enum Command {
     Rollout(rollout::RolloutArgs),
     /// Per-object success rates of policies and baselines (the paper's Table I).
     Eval(eval::EvalArgs),
+    /// Train a policy with PPO from a config file into a run folder.
+    Train(train::TrainArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -89,5 +92,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Rollout(a) => rollout::run(a, &global),
         Command::Eval(a) => eval::run(a, &global),
         Command::Objects(a) => objects::run(a, &global),
+        Command::Train(a) => train::run(a, &global),
     }
 }

@@ -1,0 +1,293 @@
+//! `metrics.csv`: one row per PPO update.
+//!
+//! Columns ([`HEADER`]): `update`, `global_step` (transitions so far), `episodes`
+//! (episodes finished so far), `success_rate`, `episode_return`, `episode_length` (means
+//! over the episodes that finished during the update; empty when none did or, for success,
+//! when the environment reports none), `policy_loss`, `value_loss`, `entropy`,
+//! `approx_kl`, `clip_fraction`, `explained_variance`, `curriculum_level` (mean success
+//! rate `r_s` of the grasp environments' curricula; empty for other environments),
+//! `transitions_per_s` (this update) and `wall_s` (training seconds so far, over resumes).
+
+use super::TrainError;
+use std::path::Path;
+
+/// The CSV header.
+pub const HEADER: &str = "update,global_step,episodes,success_rate,episode_return,\
+episode_length,policy_loss,value_loss,entropy,approx_kl,clip_fraction,explained_variance,\
+curriculum_level,transitions_per_s,wall_s";
+
+/// Columns that depend on timing and differ between identical runs.
+pub const TIME_COLUMNS: [&str; 2] = ["transitions_per_s", "wall_s"];
+
+/// One update's metrics.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MetricsRow {
+    /// Update index, from 1.
+    pub update: u64,
+    /// Transitions collected so far.
+    pub global_step: u64,
+    /// Episodes finished so far.
+    pub episodes: u64,
+    /// Success rate of the episodes finished in this update.
+    pub success_rate: Option<f64>,
+    /// Mean return of the episodes finished in this update.
+    pub episode_return: Option<f64>,
+    /// Mean length of the episodes finished in this update.
+    pub episode_length: Option<f64>,
+    /// Clipped surrogate loss.
+    pub policy_loss: f64,
+    /// Value loss.
+    pub value_loss: f64,
+    /// Policy entropy.
+    pub entropy: f64,
+    /// Approximate KL divergence.
+    pub approx_kl: f64,
+    /// Fraction of clipped ratios.
+    pub clip_fraction: f64,
+    /// Explained variance of the value function.
+    pub explained_variance: Option<f64>,
+    /// Mean curriculum success rate `r_s` over the environments.
+    pub curriculum_level: Option<f64>,
+    /// Transitions per second of this update.
+    pub transitions_per_s: f64,
+    /// Training wall time so far (s).
+    pub wall_s: f64,
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map(|x| x.to_string()).unwrap_or_default()
+}
+
+impl MetricsRow {
+    /// The row as one CSV line (no newline). Floats use Rust's shortest exact form.
+    pub fn to_csv_line(&self) -> String {
+        format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            self.update,
+            self.global_step,
+            self.episodes,
+            opt(self.success_rate),
+            opt(self.episode_return),
+            opt(self.episode_length),
+            self.policy_loss,
+            self.value_loss,
+            self.entropy,
+            self.approx_kl,
+            self.clip_fraction,
+            opt(self.explained_variance),
+            opt(self.curriculum_level),
+            self.transitions_per_s,
+            self.wall_s
+        )
+    }
+
+    /// The scalars logged to TensorBoard, as (tag, value); absent values are skipped.
+    pub fn scalars(&self) -> Vec<(&'static str, f64)> {
+        let mut v = vec![
+            ("charts/episodes", self.episodes as f64),
+            ("losses/policy_loss", self.policy_loss),
+            ("losses/value_loss", self.value_loss),
+            ("losses/entropy", self.entropy),
+            ("losses/approx_kl", self.approx_kl),
+            ("losses/clip_fraction", self.clip_fraction),
+            ("charts/transitions_per_s", self.transitions_per_s),
+        ];
+        let optional = [
+            ("charts/success_rate", self.success_rate),
+            ("charts/episode_return", self.episode_return),
+            ("charts/episode_length", self.episode_length),
+            ("losses/explained_variance", self.explained_variance),
+            ("charts/curriculum_level", self.curriculum_level),
+        ];
+        v.extend(optional.into_iter().filter_map(|(k, x)| x.map(|x| (k, x))));
+        v
+    }
+}
+
+/// The whole file: header and rows, newline-terminated.
+pub fn to_csv(rows: &[MetricsRow]) -> String {
+    let mut s = String::with_capacity(64 + rows.len() * 160);
+    s.push_str(HEADER);
+    s.push('\n');
+    for r in rows {
+        s.push_str(&r.to_csv_line());
+        s.push('\n');
+    }
+    s
+}
+
+/// Parses a metrics file's text (`path` names it in errors).
+pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<MetricsRow>, TrainError> {
+    let bad = |line: usize, message: String| TrainError::Metrics {
+        path: path.to_path_buf(),
+        line,
+        message,
+    };
+    let mut lines = text.lines();
+    match lines.next() {
+        Some(h) if h.trim_end() == HEADER => {}
+        Some(_) => return Err(bad(1, format!("the header is not `{HEADER}`"))),
+        None => return Err(bad(1, "the file is empty".into())),
+    }
+    let mut rows: Vec<MetricsRow> = Vec::new();
+    for (i, line) in lines.enumerate() {
+        let n = i + 2;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.trim_end().split(',').collect();
+        if f.len() != 15 {
+            return Err(bad(n, format!("{} fields, expected 15", f.len())));
+        }
+        let int = |k: usize, name: &str| -> Result<u64, TrainError> {
+            f[k].parse()
+                .map_err(|_| bad(n, format!("column {name}: '{}' is not an integer", f[k])))
+        };
+        let real = |k: usize, name: &str| -> Result<f64, TrainError> {
+            let v: f64 = f[k]
+                .parse()
+                .map_err(|_| bad(n, format!("column {name}: '{}' is not a number", f[k])))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(bad(n, format!("column {name}: {v} is not finite")))
+            }
+        };
+        let maybe = |k: usize, name: &str| -> Result<Option<f64>, TrainError> {
+            if f[k].is_empty() {
+                Ok(None)
+            } else {
+                real(k, name).map(Some)
+            }
+        };
+        let row = MetricsRow {
+            update: int(0, "update")?,
+            global_step: int(1, "global_step")?,
+            episodes: int(2, "episodes")?,
+            success_rate: maybe(3, "success_rate")?,
+            episode_return: maybe(4, "episode_return")?,
+            episode_length: maybe(5, "episode_length")?,
+            policy_loss: real(6, "policy_loss")?,
+            value_loss: real(7, "value_loss")?,
+            entropy: real(8, "entropy")?,
+            approx_kl: real(9, "approx_kl")?,
+            clip_fraction: real(10, "clip_fraction")?,
+            explained_variance: maybe(11, "explained_variance")?,
+            curriculum_level: maybe(12, "curriculum_level")?,
+            transitions_per_s: real(13, "transitions_per_s")?,
+            wall_s: real(14, "wall_s")?,
+        };
+        if let Some(prev) = rows.last() {
+            if row.update <= prev.update {
+                return Err(bad(
+                    n,
+                    format!(
+                        "update {} does not follow update {}",
+                        row.update, prev.update
+                    ),
+                ));
+            }
+        }
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// Reads the metrics file at `path`.
+pub fn read_csv(path: &Path) -> Result<Vec<MetricsRow>, TrainError> {
+    let text = std::fs::read_to_string(path).map_err(|source| TrainError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_csv(path, &text)
+}
+
+/// The selection score of the last `window` rows: the mean success rate when any row has
+/// one, else the mean return (for environments without success); `None` when the window
+/// holds neither.
+pub fn window_score(rows: &[MetricsRow], window: usize) -> Option<f64> {
+    let tail = &rows[rows.len().saturating_sub(window)..];
+    let mean = |vals: Vec<f64>| {
+        if vals.is_empty() {
+            None
+        } else {
+            Some(vals.iter().sum::<f64>() / vals.len() as f64)
+        }
+    };
+    let succ: Vec<f64> = tail.iter().filter_map(|r| r.success_rate).collect();
+    if !succ.is_empty() {
+        return mean(succ);
+    }
+    mean(tail.iter().filter_map(|r| r.episode_return).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(update: u64, success: Option<f64>, ret: Option<f64>) -> MetricsRow {
+        MetricsRow {
+            update,
+            global_step: update * 64,
+            episodes: update * 3,
+            success_rate: success,
+            episode_return: ret,
+            episode_length: ret.map(|r| r / 2.0),
+            policy_loss: -0.012,
+            value_loss: 0.5,
+            entropy: 1.4189385,
+            approx_kl: 1e-4,
+            clip_fraction: 0.0625,
+            explained_variance: None,
+            curriculum_level: success,
+            transitions_per_s: 1234.5,
+            wall_s: update as f64 * 0.1,
+        }
+    }
+
+    #[test]
+    fn csv_round_trips_with_empty_optionals() {
+        let rows = vec![row(1, None, None), row(2, Some(0.25), Some(13.0 / 3.0))];
+        let text = to_csv(&rows);
+        assert!(text.starts_with(HEADER));
+        assert_eq!(text.lines().count(), 3);
+        assert!(text.lines().nth(1).unwrap().starts_with("1,64,3,,,,"));
+        let back = parse_csv(Path::new("m.csv"), &text).unwrap();
+        assert_eq!(back, rows);
+    }
+
+    #[test]
+    fn malformed_files_name_line_and_column() {
+        let p = Path::new("m.csv");
+        assert!(parse_csv(p, "").unwrap_err().to_string().contains("empty"));
+        assert!(parse_csv(p, "a,b\n")
+            .unwrap_err()
+            .to_string()
+            .contains("header"));
+        let good = row(1, None, None).to_csv_line();
+        let e = parse_csv(p, &format!("{HEADER}\n{good}\n1,2\n")).unwrap_err();
+        assert!(e.to_string().contains("line 3"), "{e}");
+        let e = parse_csv(p, &format!("{HEADER}\n{}\n", good.replacen("64", "x", 1))).unwrap_err();
+        assert!(e.to_string().contains("global_step"), "{e}");
+        let e = parse_csv(p, &format!("{HEADER}\n{good}\n{good}\n")).unwrap_err();
+        assert!(e.to_string().contains("does not follow"), "{e}");
+        let nan = good.replacen("0.5", "NaN", 1);
+        assert!(parse_csv(p, &format!("{HEADER}\n{nan}\n")).is_err());
+    }
+
+    #[test]
+    fn window_score_prefers_success_then_return() {
+        let rows = vec![
+            row(1, Some(0.0), Some(1.0)),
+            row(2, Some(0.5), Some(2.0)),
+            row(3, None, Some(3.0)),
+            row(4, Some(1.0), Some(4.0)),
+        ];
+        assert_eq!(window_score(&rows, 3), Some(0.75));
+        assert_eq!(window_score(&rows, 100), Some(0.5));
+        let r = vec![row(1, None, Some(10.0)), row(2, None, Some(20.0))];
+        assert_eq!(window_score(&r, 2), Some(15.0));
+        assert_eq!(window_score(&[row(1, None, None)], 5), None);
+        assert_eq!(window_score(&[], 5), None);
+    }
+}

@@ -1,0 +1,136 @@
+//! Training runs: the `grasp train` pipeline as a library.
+//!
+//! A run is described by a [`TrainConfig`] (TOML, with `base = "..."` inheritance), lives in
+//! a run folder (`runs/<name>` by default) and writes, after every PPO update:
+//!
+//! - `config.toml`: the resolved configuration (written once per start);
+//! - `metrics.csv`: one [`MetricsRow`] per update ([`metrics`]);
+//! - `events.out.tfevents.<t0>.grasp`: the same scalars for TensorBoard ([`tfevents`]);
+//! - `checkpoints/latest` and `checkpoints/best`: PPO checkpoints with the synergy model and
+//!   the config beside them;
+//! - `learning_curve.svg`: success rate and return against transitions ([`plot`]).
+//!
+//! Every file is replaced atomically, so a run killed at any moment (even `kill -9`) can be
+//! continued with [`TrainSession::open`]`(.., resume = true)`: the metrics rows after the
+//! latest checkpoint's update are dropped and training continues from that checkpoint.
+//!
+//! ```no_run
+//! use grasp::train::{TrainConfig, TrainSession};
+//! use std::path::Path;
+//!
+//! let cfg = TrainConfig::load(Path::new("configs/cartpole.toml"))?;
+//! let mut session = TrainSession::open(cfg, Path::new("runs/cartpole"), false)?;
+//! let summary = session.run(&mut |p| println!("update {}", p.row.update))?;
+//! println!("{} transitions", summary.global_step);
+//! # Ok::<(), grasp::train::TrainError>(())
+//! ```
+
+pub mod config;
+pub mod metrics;
+pub mod objects;
+pub mod plot;
+pub mod session;
+pub mod tfevents;
+
+pub use config::{EnvKind, TrainConfig, TrainEnvConfig};
+pub use metrics::MetricsRow;
+pub use session::{Progress, StopReason, TrainSession, TrainSummary};
+
+use std::path::PathBuf;
+
+/// Errors of a training run.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    /// A config file could not be read or does not match the schema.
+    #[error(transparent)]
+    ConfigFile(#[from] crate::util::config::ConfigError),
+    /// A config value is out of range or inconsistent.
+    #[error("invalid config {path}: `{field}`: {message}")]
+    ConfigValue {
+        /// The config file (or the run's resolved config).
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The synergy model file does not exist.
+    #[error(
+        "synergy model {path} does not exist: set `synergy` in the config to a model JSON \
+         (fit one with `grasp pca fit poses.csv --out {path}`)"
+    )]
+    SynergyMissing {
+        /// The missing file.
+        path: PathBuf,
+    },
+    /// The synergy model could not be loaded.
+    #[error(transparent)]
+    Synergy(#[from] crate::synergy::SynergyError),
+    /// The synergy model has fewer components than the config asks for.
+    #[error(
+        "synergy model {path} has {found} components but the config asks for \
+         n_components = {wanted}: fit a model with at least {wanted} components"
+    )]
+    SynergyComponents {
+        /// The model file.
+        path: PathBuf,
+        /// Components in the model.
+        found: usize,
+        /// Components requested.
+        wanted: usize,
+    },
+    /// The simulator config is invalid.
+    #[error(transparent)]
+    SimConfig(#[from] crate::sim::config::SimConfigError),
+    /// The grasping environment could not be built.
+    #[error(transparent)]
+    Env(#[from] crate::env::grasp::GraspEnvError),
+    /// The learner failed.
+    #[error(transparent)]
+    Ppo(#[from] crate::ppo::PpoError),
+    /// A file could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::util::fsx::WriteError),
+    /// A file or folder could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A metrics file of the run is malformed.
+    #[error("invalid metrics file {path}, line {line}: {message}")]
+    Metrics {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A new run would overwrite an existing one.
+    #[error(
+        "run folder {dir} already holds a run: pass --resume to continue it or --out for a \
+         new folder"
+    )]
+    RunExists {
+        /// The run folder.
+        dir: PathBuf,
+    },
+    /// `--resume` found nothing to resume.
+    #[error("cannot resume: no checkpoint at {path}")]
+    NoCheckpoint {
+        /// The checkpoint file looked for.
+        path: PathBuf,
+    },
+    /// The learning-curve plot could not be drawn.
+    #[error("cannot draw {path}: {message}")]
+    Plot {
+        /// The SVG file.
+        path: PathBuf,
+        /// What failed.
+        message: String,
+    },
+}

@@ -1,0 +1,518 @@
+//! A training run in its run folder: environments, trainer, metrics, checkpoints, plots.
+
+use super::config::{EnvKind, TrainConfig};
+use super::metrics::{self, MetricsRow};
+use super::objects::object_set;
+use super::{plot, tfevents, TrainError};
+use crate::env::api::{Action, ActionSpec, Env, Step};
+use crate::env::cartpole::CartPole;
+use crate::env::grasp::GraspEnv;
+use crate::ppo::{Trainer, UpdateMetrics, CHECKPOINT_FILE};
+use crate::robot::{Robot, Side};
+use crate::sim::SimConfig;
+use crate::synergy::SynergyModel;
+use crate::util::fsx::write_atomic;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
+
+/// File names inside a run folder.
+pub mod files {
+    /// The resolved config.
+    pub const CONFIG: &str = "config.toml";
+    /// The metrics table.
+    pub const METRICS: &str = "metrics.csv";
+    /// The learning-curve plot.
+    pub const PLOT: &str = "learning_curve.svg";
+    /// The synergy model copied beside a checkpoint.
+    pub const SYNERGY: &str = "synergy.json";
+    /// Prefix of the TensorBoard event file (`events.out.tfevents.<t0>.grasp`).
+    pub const EVENTS_PREFIX: &str = "events.out.tfevents.";
+    /// Suffix of the TensorBoard event file.
+    pub const EVENTS_SUFFIX: &str = ".grasp";
+}
+
+/// The latest checkpoint folder of run folder `dir`.
+pub fn latest_dir(dir: &Path) -> PathBuf {
+    dir.join("checkpoints").join("latest")
+}
+
+/// The best checkpoint folder of run folder `dir`.
+pub fn best_dir(dir: &Path) -> PathBuf {
+    dir.join("checkpoints").join("best")
+}
+
+/// The environments' curriculum levels, shared with the training loop.
+#[derive(Debug)]
+struct CurriculumProbe {
+    rates: Vec<AtomicU64>,
+}
+
+impl CurriculumProbe {
+    fn mean(&self) -> f64 {
+        let s: f64 = self
+            .rates
+            .iter()
+            .map(|r| f64::from_bits(r.load(Ordering::Relaxed)))
+            .sum();
+        s / self.rates.len().max(1) as f64
+    }
+}
+
+/// A grasp environment that publishes its curriculum rate after every reset and step.
+struct ProbedGrasp {
+    env: GraspEnv,
+    probe: Arc<CurriculumProbe>,
+    index: usize,
+}
+
+impl ProbedGrasp {
+    fn publish(&self) {
+        self.probe.rates[self.index].store(self.env.curriculum_rate().to_bits(), Ordering::Relaxed);
+    }
+}
+
+impl Env for ProbedGrasp {
+    fn obs_dim(&self) -> usize {
+        self.env.obs_dim()
+    }
+    fn action_spec(&self) -> ActionSpec {
+        self.env.action_spec()
+    }
+    fn reset(&mut self, seed: u64) -> Vec<f32> {
+        let o = self.env.reset(seed);
+        self.publish();
+        o
+    }
+    fn step(&mut self, a: &Action) -> Step {
+        let s = self.env.step(a);
+        self.publish();
+        s
+    }
+}
+
+/// Loads the synergy model of `cfg`, checking that it exists, keeping its first
+/// `n_components` components (a model with fewer is an error).
+pub fn load_synergy(cfg: &TrainConfig) -> Result<SynergyModel, TrainError> {
+    let path = &cfg.synergy;
+    if !path.exists() {
+        return Err(TrainError::SynergyMissing { path: path.clone() });
+    }
+    let model = SynergyModel::load(path)?;
+    if model.n_components() < cfg.n_components {
+        return Err(TrainError::SynergyComponents {
+            path: path.clone(),
+            found: model.n_components(),
+            wanted: cfg.n_components,
+        });
+    }
+    Ok(model.truncated(cfg.n_components)?)
+}
+
+type Built = (
+    Vec<Box<dyn Env>>,
+    Option<Arc<CurriculumProbe>>,
+    Option<SynergyModel>,
+);
+
+/// Builds the `num_envs` environments of `cfg`.
+fn build_envs(cfg: &TrainConfig) -> Result<Built, TrainError> {
+    match cfg.env.kind {
+        EnvKind::Cartpole => {
+            let envs = (0..cfg.num_envs)
+                .map(|_| Box::new(CartPole::new(cfg.env.cartpole_max_steps)) as Box<dyn Env>)
+                .collect();
+            Ok((envs, None, None))
+        }
+        EnvKind::Grasp => {
+            let model = load_synergy(cfg)?;
+            let sim = match &cfg.sim_config {
+                Some(p) => SimConfig::load(p)?,
+                None => SimConfig::default(),
+            };
+            let objects = object_set(&cfg.objects).ok_or_else(|| TrainError::ConfigValue {
+                path: PathBuf::from(files::CONFIG),
+                field: "objects".into(),
+                message: format!("unknown object set '{}'", cfg.objects),
+            })?;
+            let robot = Robot::builtin(Side::Left);
+            let probe = Arc::new(CurriculumProbe {
+                rates: (0..cfg.num_envs).map(|_| AtomicU64::new(0)).collect(),
+            });
+            let mut envs: Vec<Box<dyn Env>> = Vec::with_capacity(cfg.num_envs);
+            for index in 0..cfg.num_envs {
+                let env = GraspEnv::new(
+                    &robot,
+                    objects.clone(),
+                    model.clone(),
+                    sim.clone(),
+                    cfg.env.grasp.clone(),
+                )?;
+                let p = ProbedGrasp {
+                    env,
+                    probe: Arc::clone(&probe),
+                    index,
+                };
+                p.publish();
+                envs.push(Box::new(p));
+            }
+            Ok((envs, Some(probe), Some(model)))
+        }
+    }
+}
+
+/// What the caller sees after each update.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress<'a> {
+    /// The update's metrics row.
+    pub row: &'a MetricsRow,
+    /// Updates planned in total.
+    pub planned_updates: u64,
+    /// Transitions planned in total (`planned_updates * batch`).
+    pub planned_steps: u64,
+}
+
+/// Why a run stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// All planned updates are done.
+    Completed,
+    /// `time_budget_minutes` ran out.
+    TimeBudget,
+}
+
+/// The outcome of [`TrainSession::run`].
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TrainSummary {
+    /// The run folder.
+    pub run_dir: PathBuf,
+    /// Updates done in total (over resumes).
+    pub updates: u64,
+    /// Updates done by this call.
+    pub new_updates: u64,
+    /// Transitions collected in total.
+    pub global_step: u64,
+    /// Episodes finished in total.
+    pub episodes: u64,
+    /// The last metrics row.
+    pub last: Option<MetricsRow>,
+    /// The most recent success rate recorded (updates where no episode ended have none).
+    pub last_success_rate: Option<f64>,
+    /// The most recent mean episode return recorded.
+    pub last_return: Option<f64>,
+    /// Best windowed score so far (success rate, or return without success).
+    pub best_score: Option<f64>,
+    /// Why it stopped.
+    pub stop: StopReason,
+    /// Training wall time in total (s).
+    pub wall_s: f64,
+}
+
+/// A run folder with its trainer, ready to train.
+pub struct TrainSession {
+    cfg: TrainConfig,
+    dir: PathBuf,
+    trainer: Trainer,
+    rows: Vec<MetricsRow>,
+    probe: Option<Arc<CurriculumProbe>>,
+    synergy_json: Option<String>,
+    config_text: String,
+    events_path: PathBuf,
+    t0_unix: f64,
+    best: Option<f64>,
+    wall_offset: f64,
+}
+
+fn now_unix() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// The existing event file of `dir` and its start time, if any.
+fn find_events(dir: &Path) -> Result<Option<(PathBuf, f64)>, TrainError> {
+    let rd = std::fs::read_dir(dir).map_err(|source| TrainError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    for entry in rd.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if let Some(t0) = name
+            .strip_prefix(files::EVENTS_PREFIX)
+            .and_then(|r| r.strip_suffix(files::EVENTS_SUFFIX))
+            .and_then(|t| t.parse::<u64>().ok())
+        {
+            return Ok(Some((entry.path(), t0 as f64)));
+        }
+    }
+    Ok(None)
+}
+
+impl TrainSession {
+    /// Prepares run folder `dir` for `cfg`. A new run (`resume = false`) refuses a folder
+    /// that already holds metrics or a checkpoint. With `resume`, the trainer is restored
+    /// from `checkpoints/latest` (its network must match `cfg`; the other settings of `cfg`
+    /// apply from now on, so `total_timesteps` can be raised), the metrics rows after the
+    /// checkpoint's update are dropped and the TensorBoard file is rebuilt from the rest.
+    pub fn open(cfg: TrainConfig, dir: &Path, resume: bool) -> Result<TrainSession, TrainError> {
+        let latest = latest_dir(dir);
+        let ck_file = latest.join(CHECKPOINT_FILE);
+        let metrics_path = dir.join(files::METRICS);
+        if resume && !ck_file.exists() {
+            return Err(TrainError::NoCheckpoint { path: ck_file });
+        }
+        if !resume && (ck_file.exists() || metrics_path.exists()) {
+            return Err(TrainError::RunExists {
+                dir: dir.to_path_buf(),
+            });
+        }
+        let (envs, probe, model) = build_envs(&cfg)?;
+        let mut trainer = Trainer::new(cfg.ppo_config(), envs)?;
+        let mut rows = Vec::new();
+        if resume {
+            trainer.load_checkpoint(&latest)?;
+            if metrics_path.exists() {
+                rows = metrics::read_csv(&metrics_path)?;
+            }
+            rows.retain(|r| r.update <= trainer.update_index());
+        }
+        std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let (events_path, t0_unix) = match if resume { find_events(dir)? } else { None } {
+            Some(found) => found,
+            None => {
+                let t0 = now_unix().floor();
+                let name = format!(
+                    "{}{}{}",
+                    files::EVENTS_PREFIX,
+                    t0 as u64,
+                    files::EVENTS_SUFFIX
+                );
+                (dir.join(name), t0)
+            }
+        };
+        let mut best: Option<f64> = None;
+        for k in 1..=rows.len() {
+            let s = metrics::window_score(&rows[..k], cfg.best_window);
+            if let Some(s) = s {
+                best = Some(best.map_or(s, |b: f64| b.max(s)));
+            }
+        }
+        let config_text = cfg.to_toml_string()?;
+        let session = TrainSession {
+            wall_offset: rows.last().map_or(0.0, |r| r.wall_s),
+            synergy_json: model.map(|m| m.to_json()),
+            cfg,
+            dir: dir.to_path_buf(),
+            trainer,
+            rows,
+            probe,
+            config_text,
+            events_path,
+            t0_unix,
+            best,
+        };
+        write_atomic(&dir.join(files::CONFIG), session.config_text.as_bytes())?;
+        session.write_logs()?;
+        Ok(session)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &TrainConfig {
+        &self.cfg
+    }
+
+    /// The metrics rows so far.
+    pub fn rows(&self) -> &[MetricsRow] {
+        &self.rows
+    }
+
+    /// The trainer.
+    pub fn trainer(&self) -> &Trainer {
+        &self.trainer
+    }
+
+    /// The run folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Rewrites `metrics.csv` and the TensorBoard file from the rows.
+    fn write_logs(&self) -> Result<(), TrainError> {
+        write_atomic(
+            &self.dir.join(files::METRICS),
+            metrics::to_csv(&self.rows).as_bytes(),
+        )?;
+        let entries: Vec<(f64, i64, tfevents::Scalars<'_>)> = self
+            .rows
+            .iter()
+            .map(|r| {
+                let scalars = r
+                    .scalars()
+                    .into_iter()
+                    .map(|(k, v)| (k, v as f32))
+                    .collect();
+                (self.t0_unix + r.wall_s, r.global_step as i64, scalars)
+            })
+            .collect();
+        write_atomic(
+            &self.events_path,
+            &tfevents::event_file(self.t0_unix, &entries),
+        )?;
+        Ok(())
+    }
+
+    /// Saves the trainer with the synergy model and the config into `dir`.
+    fn save_checkpoint(&self, dir: &Path) -> Result<(), TrainError> {
+        if let Some(json) = &self.synergy_json {
+            write_atomic(&dir.join(files::SYNERGY), json.as_bytes())?;
+        }
+        write_atomic(&dir.join(files::CONFIG), self.config_text.as_bytes())?;
+        self.trainer.save_checkpoint(dir)?;
+        Ok(())
+    }
+
+    fn plot(&self) -> Result<(), TrainError> {
+        plot::write_learning_curve(&self.dir.join(files::PLOT), &self.cfg.name, &self.rows)
+    }
+
+    fn row_from(&self, m: &UpdateMetrics, wall_s: f64) -> MetricsRow {
+        let episodes = self.rows.last().map_or(0, |r| r.episodes) + m.episodes as u64;
+        MetricsRow {
+            update: m.update,
+            global_step: m.global_step,
+            episodes,
+            success_rate: m.success_rate,
+            episode_return: m.mean_return,
+            episode_length: m.mean_length,
+            policy_loss: m.policy_loss,
+            value_loss: m.value_loss,
+            entropy: m.entropy,
+            approx_kl: m.approx_kl,
+            clip_fraction: m.clip_fraction,
+            explained_variance: m.explained_variance,
+            curriculum_level: self.probe.as_ref().map(|p| p.mean()),
+            transitions_per_s: m.transitions_per_sec,
+            wall_s,
+        }
+    }
+
+    /// Trains until the planned updates are done or the time budget runs out, calling
+    /// `on_update` after each update. After every update the metrics and TensorBoard files
+    /// are rewritten; `checkpoints/latest` is saved every `checkpoint_every` updates and at
+    /// the end, `checkpoints/best` whenever the windowed score improves, and the plot every
+    /// `plot_every` updates and at the end.
+    pub fn run(
+        &mut self,
+        on_update: &mut dyn FnMut(Progress<'_>),
+    ) -> Result<TrainSummary, TrainError> {
+        let start = Instant::now();
+        let planned = self.trainer.num_updates();
+        let planned_steps = planned * self.trainer.config().batch_size() as u64;
+        let budget = self.cfg.time_budget_minutes.map(|m| m * 60.0);
+        let first = self.trainer.update_index();
+        let mut stop = StopReason::Completed;
+        let mut saved_at = first;
+        while self.trainer.update_index() < planned {
+            let m = self.trainer.train_update()?;
+            let row = self.row_from(&m, self.wall_offset + start.elapsed().as_secs_f64());
+            self.rows.push(row);
+            self.write_logs()?;
+            let u = m.update;
+            if let Some(s) = metrics::window_score(&self.rows, self.cfg.best_window) {
+                if self.best.is_none_or(|b| s > b) {
+                    self.best = Some(s);
+                    self.save_checkpoint(&best_dir(&self.dir))?;
+                }
+            }
+            if u.is_multiple_of(self.cfg.checkpoint_every) {
+                self.save_checkpoint(&latest_dir(&self.dir))?;
+                saved_at = u;
+            }
+            if u.is_multiple_of(self.cfg.plot_every) {
+                self.plot()?;
+            }
+            if let Some(last) = self.rows.last() {
+                on_update(Progress {
+                    row: last,
+                    planned_updates: planned,
+                    planned_steps,
+                });
+            }
+            if budget.is_some_and(|b| start.elapsed().as_secs_f64() >= b) {
+                stop = StopReason::TimeBudget;
+                break;
+            }
+        }
+        if saved_at != self.trainer.update_index()
+            || !latest_dir(&self.dir).join(CHECKPOINT_FILE).exists()
+        {
+            self.save_checkpoint(&latest_dir(&self.dir))?;
+        }
+        self.plot()?;
+        let last = self.rows.last().cloned();
+        Ok(TrainSummary {
+            run_dir: self.dir.clone(),
+            updates: self.trainer.update_index(),
+            new_updates: self.trainer.update_index() - first,
+            global_step: self.trainer.global_step(),
+            episodes: last.as_ref().map_or(0, |r| r.episodes),
+            best_score: self.best,
+            stop,
+            wall_s: last.as_ref().map_or(self.wall_offset, |r| r.wall_s),
+            last_success_rate: self.rows.iter().rev().find_map(|r| r.success_rate),
+            last_return: self.rows.iter().rev().find_map(|r| r.episode_return),
+            last,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Posture;
+    use crate::sim::script;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn truncation_keeps_the_leading_components() {
+        let robot = Robot::builtin(Side::Left);
+        let lim = robot.finger_limits();
+        let (a, b) = (Posture::CShape.angles(), script::power_grasp());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let rows: Vec<[f64; 22]> = (0..200)
+            .map(|_| {
+                let t: f64 = rng.random();
+                std::array::from_fn(|k| {
+                    (a[k + 2] + t * (b[k + 2] - a[k + 2]) + rng.random_range(-0.05..0.05))
+                        .clamp(lim[k].0, lim[k].1)
+                })
+            })
+            .collect();
+        let m5 = SynergyModel::fit(&rows, 5).unwrap();
+        let m3 = m5.truncated(3).unwrap();
+        assert_eq!(m3.n_components(), 3);
+        // The JSON round trip may move a value by one ulp.
+        let close = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+        };
+        for k in 0..3 {
+            assert!(
+                close(&m3.components()[k], &m5.components()[k]),
+                "component {k}"
+            );
+        }
+        assert!(close(m3.projection_min(), &m5.projection_min()[..3]));
+        assert!(close(m3.projection_max(), &m5.projection_max()[..3]));
+        assert!(close(m3.eigenvalues(), m5.eigenvalues()));
+        let fit3 = SynergyModel::fit(&rows, 3).unwrap();
+        for (x, y) in fit3.components().iter().zip(m3.components()) {
+            let dot: f64 = x.iter().zip(y).map(|(p, q)| p * q).sum();
+            assert!((dot.abs() - 1.0).abs() < 1e-9, "{dot}");
+        }
+    }
+}

@@ -1,0 +1,339 @@
+//! `grasp train` end to end on tiny runs: run folder contents, resume, determinism, the
+//! grasp environment with the primitive objects, and config errors.
+
+use grasp::robot::{Posture, Robot, Side};
+use grasp::sim::script;
+use grasp::synergy::SynergyModel;
+use grasp::train::metrics::{parse_csv, HEADER};
+use grasp::train::tfevents::{decode_event, read_records};
+use grasp::train::TrainConfig;
+use rand::{Rng, SeedableRng};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn grasp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run grasp")
+}
+
+fn ok(out: &Output) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "grasp failed: {stderr}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// 2 cart-poles x 32 steps per update.
+fn cartpole_config(dir: &Path, total: u64) -> PathBuf {
+    write(
+        dir,
+        "cp.toml",
+        &format!(
+            "name = \"cp\"\nseed = 5\ntotal_timesteps = {total}\nnum_envs = 2\nthreads = 1\n\
+             checkpoint_every = 1\nplot_every = 2\nbest_window = 2\n[ppo]\nnum_steps = 32\n\
+             num_minibatches = 2\nupdate_epochs = 2\n[policy]\nkind = \"mlp\"\nmlp_hidden = 16\n\
+             [env]\nkind = \"cartpole\"\ncartpole_max_steps = 50\n"
+        ),
+    )
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn updates(run: &Path) -> Vec<u64> {
+    let text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    parse_csv(Path::new("metrics.csv"), &text)
+        .unwrap()
+        .iter()
+        .map(|r| r.update)
+        .collect()
+}
+
+#[test]
+fn cartpole_run_writes_the_run_folder_and_resumes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = cartpole_config(tmp.path(), 192);
+    let run = tmp.path().join("run");
+    let out = ok(&grasp(&["train", "--config", s(&cfg), "--out", s(&run)]));
+    assert!(out.contains("completed: 3 updates"), "{out}");
+    // Resolved config reads back.
+    let c = TrainConfig::load(&run.join("config.toml")).unwrap();
+    assert_eq!((c.name.as_str(), c.seed, c.num_envs), ("cp", 5, 2));
+    let text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    assert_eq!(text.lines().next().unwrap(), HEADER);
+    assert_eq!(updates(&run), vec![1, 2, 3]);
+    let rows = parse_csv(Path::new("m"), &text).unwrap();
+    assert_eq!(rows[2].global_step, 192);
+    assert!(rows
+        .iter()
+        .all(|r| r.curriculum_level.is_none() && r.success_rate.is_none()));
+    // TensorBoard: a version record and one scalar event per update, CRCs valid.
+    let ev: Vec<PathBuf> = std::fs::read_dir(&run)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().contains("tfevents"))
+        .collect();
+    assert_eq!(ev.len(), 1);
+    let recs = read_records(&std::fs::read(&ev[0]).unwrap()).unwrap();
+    assert_eq!(recs.len(), 4);
+    let last = decode_event(&recs[3]).unwrap();
+    assert_eq!(last.step, 192);
+    assert!(last.values.iter().any(|(t, _)| t == "losses/policy_loss"));
+    for d in ["latest", "best"] {
+        let ck = run.join("checkpoints").join(d);
+        assert!(ck.join("checkpoint.safetensors").is_file(), "{d}");
+        assert!(ck.join("config.toml").is_file(), "{d}");
+    }
+    let svg = std::fs::read_to_string(run.join("learning_curve.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("episode return"));
+
+    // A second start in the same folder is refused; --resume continues.
+    let e = grasp(&["train", "--config", s(&cfg), "--out", s(&run)]);
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--resume"));
+    let out = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        "320",
+    ]));
+    assert!(out.contains("5 updates (2 new)"), "{out}");
+    assert_eq!(updates(&run), vec![1, 2, 3, 4, 5]);
+
+    // Rows written after the last checkpoint (a kill between the two) are dropped on resume.
+    let mut text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    let extra = text.lines().last().unwrap().replacen("5,", "6,", 1);
+    text.push_str(&extra);
+    text.push('\n');
+    std::fs::write(run.join("metrics.csv"), text).unwrap();
+    ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        "384",
+    ]));
+    assert_eq!(updates(&run), vec![1, 2, 3, 4, 5, 6]);
+    let recs = read_records(&std::fs::read(&ev[0]).unwrap()).unwrap();
+    assert_eq!(recs.len(), 7);
+}
+
+#[test]
+fn same_seed_gives_the_same_metrics_and_json_summary() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = cartpole_config(tmp.path(), 128);
+    let untimed = |run: &Path| {
+        let text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+        let mut rows = parse_csv(Path::new("m"), &text).unwrap();
+        for r in &mut rows {
+            r.transitions_per_s = 0.0;
+            r.wall_s = 0.0;
+        }
+        rows
+    };
+    let (a, b, c) = (
+        tmp.path().join("a"),
+        tmp.path().join("b"),
+        tmp.path().join("c"),
+    );
+    let out = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&a),
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["updates"], 2);
+    assert_eq!(v["stop"], "completed");
+    ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&b),
+        "-q",
+    ]));
+    ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&c),
+        "-q",
+        "--seed",
+        "6",
+    ]));
+    assert_eq!(untimed(&a), untimed(&b));
+    assert_ne!(untimed(&a), untimed(&c));
+}
+
+/// A synergy model fitted to noisy postures between the C-shape and the power grasp.
+fn test_model(path: &Path) {
+    let robot = Robot::builtin(Side::Left);
+    let lim = robot.finger_limits();
+    let a = Posture::CShape.angles();
+    let b = script::power_grasp();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let rows: Vec<[f64; 22]> = (0..300)
+        .map(|_| {
+            let t: f64 = rng.random();
+            std::array::from_fn(|k| {
+                (a[k + 2] + t * (b[k + 2] - a[k + 2]) + rng.random_range(-0.05..0.05))
+                    .clamp(lim[k].0, lim[k].1)
+            })
+        })
+        .collect();
+    SynergyModel::fit(&rows, 5).unwrap().save(path).unwrap();
+}
+
+#[test]
+fn grasp_env_with_primitives_runs_one_update() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("model.json");
+    test_model(&model);
+    let cfg = write(
+        tmp.path(),
+        "g.toml",
+        &format!(
+            "base = \"{}\"\nname = \"g\"\ntotal_timesteps = 16\nnum_envs = 2\nthreads = 2\n\
+             synergy = \"{}\"\n[ppo]\nnum_steps = 8\nnum_minibatches = 2\nupdate_epochs = 1\n\
+             [policy]\nembed_dim = 16\ngru_hidden = 16\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/configs/base.toml"),
+            s(&model)
+        ),
+    );
+    let run = tmp.path().join("run");
+    let out = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["global_step"], 16);
+    let text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    let rows = parse_csv(Path::new("m"), &text).unwrap();
+    assert_eq!(rows.len(), 1);
+    let level = rows[0].curriculum_level.expect("curriculum level");
+    assert!((0.0..=1.0).contains(&level));
+    let latest = run.join("checkpoints/latest");
+    assert!(latest.join("checkpoint.safetensors").is_file());
+    SynergyModel::load(&latest.join("synergy.json")).unwrap();
+
+    // The model is truncated to fewer components; more than it has is an error.
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    let few = write(tmp.path(), "g3.toml", &format!("n_components = 8\n{text}"));
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&few),
+        "--out",
+        s(&tmp.path().join("r8")),
+    ]);
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(!e.status.success() && err.contains("at least 8"), "{err}");
+}
+
+#[test]
+fn config_errors_name_key_line_and_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let typo = write(
+        tmp.path(),
+        "typo.toml",
+        "name = \"t\"\n[ppo]\nnum_steps = 8\nlerning_rate = 0.1\n",
+    );
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&typo),
+        "--out",
+        s(&tmp.path().join("r")),
+    ]);
+    assert!(!e.status.success());
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        err.contains("lerning_rate") && err.contains("line 4") && err.contains("typo.toml"),
+        "{err}"
+    );
+
+    let missing = tmp.path().join("nowhere/model.json");
+    let cfg = write(
+        tmp.path(),
+        "m.toml",
+        &format!(
+            "name = \"m\"\nnum_envs = 4\nsynergy = \"{}\"\n",
+            s(&missing)
+        ),
+    );
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&tmp.path().join("r2")),
+    ]);
+    assert!(!e.status.success());
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        err.contains(s(&missing)) && err.contains("does not exist"),
+        "{err}"
+    );
+    assert!(!tmp.path().join("r2").exists());
+
+    let e = grasp(&["train", "--config", s(&tmp.path().join("absent.toml"))]);
+    assert!(String::from_utf8_lossy(&e.stderr).contains("absent.toml"));
+    let e = grasp(&["train", "--config", s(&cfg), "--num-envs", "0"]);
+    assert!(String::from_utf8_lossy(&e.stderr).contains("num_envs"));
+}
+
+#[test]
+fn shipped_configs_load() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if name == "sim.toml" || !name.ends_with(".toml") {
+            continue;
+        }
+        let c = TrainConfig::load(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if name != "base.toml" {
+            assert_eq!(format!("{}.toml", c.name), name, "name of {name}");
+        }
+        n += 1;
+    }
+    assert_eq!(n, 10);
+    let base = TrainConfig::load(&dir.join("base.toml")).unwrap();
+    let mut dflt = TrainConfig::load(&dir.join("gru_m3_pca5.toml")).unwrap();
+    assert_eq!(dflt.name, base.name);
+    dflt.name = base.name.clone();
+    assert_eq!(dflt, base);
+    let m1 = TrainConfig::load(&dir.join("gru_m1_pca5.toml")).unwrap();
+    assert_eq!(m1.env.grasp.modality, grasp::env::obs::Modality::M1);
+    assert_eq!(
+        TrainConfig::load(&dir.join("gru_m3_pca8.toml"))
+            .unwrap()
+            .n_components,
+        8
+    );
+}
