@@ -39,12 +39,23 @@ pub fn primitives() -> Vec<(String, ObjectSpec)> {
     ]
 }
 
-/// The object set called `name` (`None` for an unknown name).
-pub fn object_set(name: &str) -> Option<Vec<(String, ObjectSpec)>> {
-    match name {
-        "primitives" => Some(primitives()),
-        _ => None,
+/// The object set called `name`: `primitives`, or anything `--objects` accepts (`train`,
+/// `unseen`, a folder, a manifest, names), converted for the simulator. Errors name the
+/// unknown set or the object that cannot be simulated.
+pub fn object_set(name: &str) -> Result<Vec<(String, ObjectSpec)>, String> {
+    if name == "primitives" {
+        return Ok(primitives());
     }
+    let ctx = crate::objects::sets::BuildContext::from_env();
+    let objects = crate::objects::sets::load_objects(name, &ctx).map_err(|e| e.to_string())?;
+    objects
+        .iter()
+        .map(|o| {
+            ObjectSpec::from_object(o)
+                .map(|s| (o.name.clone(), s))
+                .map_err(|e| format!("object '{}': {e}", o.name))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -68,6 +79,6 @@ mod tests {
             .filter(|(_, s)| matches!(s.shape, ObjectShape::Box { .. }))
             .count();
         assert_eq!(boxes, 4);
-        assert!(object_set("primitives").is_some() && object_set("ycb").is_none());
+        assert!(object_set("primitives").is_ok() && object_set("no_such_set_xyz").is_err());
     }
 }

@@ -131,10 +131,10 @@ fn build_envs(cfg: &TrainConfig) -> Result<Built, TrainError> {
                 Some(p) => SimConfig::load(p)?,
                 None => SimConfig::default(),
             };
-            let objects = object_set(&cfg.objects).ok_or_else(|| TrainError::ConfigValue {
+            let objects = object_set(&cfg.objects).map_err(|message| TrainError::ConfigValue {
                 path: PathBuf::from(files::CONFIG),
                 field: "objects".into(),
-                message: format!("unknown object set '{}'", cfg.objects),
+                message,
             })?;
             let robot = Robot::builtin(Side::Left);
             let probe = Arc::new(CurriculumProbe {
