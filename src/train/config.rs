@@ -92,7 +92,8 @@ pub struct TrainConfig {
     pub best_window: usize,
     /// Stop cleanly (with a checkpoint) after this much wall time, if set.
     pub time_budget_minutes: Option<f64>,
-    /// The object set: `"primitives"` ([`super::objects::primitives`]).
+    /// The object set: `"primitives"` ([`super::objects::primitives`]) or anything
+    /// `--objects` accepts (`train`, `unseen`, a folder, a manifest, names).
     pub objects: String,
     /// The synergy model JSON (grasp runs).
     pub synergy: PathBuf,
@@ -308,7 +309,7 @@ impl TrainConfig {
             plot_every: f.plot_every.unwrap_or(5),
             best_window: f.best_window.unwrap_or(10),
             time_budget_minutes: f.time_budget_minutes,
-            objects: f.objects.unwrap_or_else(|| "primitives".into()),
+            objects: f.objects.unwrap_or_else(|| "train".into()),
             synergy: f
                 .synergy
                 .unwrap_or_else(|| PathBuf::from("assets/synergy/model.json")),
@@ -395,13 +396,9 @@ impl TrainConfig {
             return bad("threads", "must be at least 1".into());
         }
         if self.objects != "primitives" {
-            return bad(
-                "objects",
-                format!(
-                    "unknown object set '{}': expected \"primitives\"",
-                    self.objects
-                ),
-            );
+            if let Err(e) = crate::objects::sets::resolve_specs(&self.objects) {
+                return bad("objects", e.to_string());
+            }
         }
         if !(1..=22).contains(&self.n_components) {
             return bad(
