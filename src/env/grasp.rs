@@ -290,20 +290,32 @@ impl GraspEnv {
         Ok(())
     }
 
-    /// Stage 1: follows the closing trajectory T until any fingertip touches the object.
-    /// Returns whether a touch ended it.
-    fn stage1(&mut self) -> bool {
+    /// The closing trajectory T: the number of target updates over `closing_time` and
+    /// the physics steps between two updates.
+    fn closing_schedule(&self) -> (usize, usize) {
         let n = (self.cfg.closing_time / self.cfg.closing_period)
             .round()
             .max(1.0) as usize;
         let per = (self.cfg.closing_period / self.sim.config().dt)
             .round()
             .max(1.0) as usize;
+        (n, per)
+    }
+
+    /// Target of joint `j` at update `i` of `n` along T: a smooth (smoothstep) path from the
+    /// start posture to the power grasp, held at the end for `i > n`.
+    fn closing_target(&self, j: usize, i: usize, n: usize) -> f64 {
+        let s = (i as f64 / n as f64).min(1.0);
+        let a = s * s * (3.0 - 2.0 * s);
+        self.start[j] + a * (self.closed[j] - self.start[j])
+    }
+
+    /// Stage 1: follows the closing trajectory T until any fingertip touches the object.
+    /// Returns whether a touch ended it.
+    fn stage1(&mut self) -> bool {
+        let (n, per) = self.closing_schedule();
         for i in 1..=n {
-            let s = i as f64 / n as f64;
-            let a = s * s * (3.0 - 2.0 * s);
-            let t: [f64; 24] =
-                std::array::from_fn(|j| self.start[j] + a * (self.closed[j] - self.start[j]));
+            let t: [f64; 24] = std::array::from_fn(|j| self.closing_target(j, i, n));
             if self.sim.set_targets(&t).is_err() {
                 return false;
             }
@@ -389,26 +401,19 @@ impl GraspEnv {
         seed: u64,
     ) -> Result<EpisodeSummary, SimError> {
         self.reset_scene(seed)?;
-        let n = (self.cfg.closing_time / self.cfg.closing_period)
-            .round()
-            .max(1.0) as usize;
-        let per = (self.cfg.closing_period / self.sim.config().dt)
-            .round()
-            .max(1.0) as usize;
+        let (n, per) = self.closing_schedule();
         let mut frozen = [false; 3];
         let mut targets = self.start;
         let finger_joints: [std::ops::Range<usize>; 3] = [2..6, 6..10, 10..14];
         let settle = (0.3 / self.cfg.closing_period).round() as usize;
         let mut ok = true;
         'outer: for i in 1..=n + settle {
-            let s = (i as f64 / n as f64).min(1.0);
-            let a = s * s * (3.0 - 2.0 * s);
             for (j, t) in targets.iter_mut().enumerate() {
                 let f = finger_joints.iter().position(|r| r.contains(&j));
                 if f.is_some_and(|f| frozen[f]) {
                     continue;
                 }
-                *t = self.start[j] + a * (self.closed[j] - self.start[j]);
+                *t = self.closing_target(j, i, n);
             }
             if self.sim.set_targets(&targets).is_err() {
                 ok = false;
