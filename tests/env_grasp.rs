@@ -1,34 +1,15 @@
 //! The grasping MDP end to end on the simulator: baselines, a random agent, determinism.
 
+mod common;
+
 use grasp::env::api::Env;
 use grasp::env::grasp::{run_episode, EnvConfig, GraspEnv, RandomAgent};
-use grasp::robot::{Posture, Robot, Side};
-use grasp::sim::{script, ObjectSpec, SimConfig};
-use grasp::synergy::SynergyModel;
-use rand::{Rng, SeedableRng};
-
-/// A synergy model fitted to noisy postures between the C-shape and the power grasp: a
-/// small stand-in for the shipped model that keeps this test independent of it.
-fn test_model(robot: &Robot) -> SynergyModel {
-    let lim = robot.finger_limits();
-    let a = Posture::CShape.angles();
-    let b = script::power_grasp();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-    let rows: Vec<[f64; 22]> = (0..300)
-        .map(|_| {
-            let t: f64 = rng.random();
-            std::array::from_fn(|k| {
-                (a[k + 2] + t * (b[k + 2] - a[k + 2]) + rng.random_range(-0.05..0.05))
-                    .clamp(lim[k].0, lim[k].1)
-            })
-        })
-        .collect();
-    SynergyModel::fit(&rows, 5).expect("fit")
-}
+use grasp::robot::{Robot, Side};
+use grasp::sim::{ObjectSpec, SimConfig};
 
 fn env() -> GraspEnv {
     let robot = Robot::builtin(Side::Left);
-    let model = test_model(&robot);
+    let model = common::test_model();
     let objects = vec![
         ("box".to_string(), ObjectSpec::default_box()),
         ("cylinder".to_string(), ObjectSpec::default_cylinder()),

@@ -1,13 +1,12 @@
 //! `grasp train` end to end on tiny runs: run folder contents, resume, determinism, the
 //! grasp environment with the primitive objects, and config errors.
 
-use grasp::robot::{Posture, Robot, Side};
-use grasp::sim::script;
+mod common;
+
 use grasp::synergy::SynergyModel;
 use grasp::train::metrics::{parse_csv, HEADER};
 use grasp::train::tfevents::{decode_event, read_records};
 use grasp::train::TrainConfig;
-use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -185,23 +184,9 @@ fn same_seed_gives_the_same_metrics_and_json_summary() {
     assert_ne!(untimed(&a), untimed(&c));
 }
 
-/// A synergy model fitted to noisy postures between the C-shape and the power grasp.
+/// Saves the shared test synergy model to `path`.
 fn test_model(path: &Path) {
-    let robot = Robot::builtin(Side::Left);
-    let lim = robot.finger_limits();
-    let a = Posture::CShape.angles();
-    let b = script::power_grasp();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-    let rows: Vec<[f64; 22]> = (0..300)
-        .map(|_| {
-            let t: f64 = rng.random();
-            std::array::from_fn(|k| {
-                (a[k + 2] + t * (b[k + 2] - a[k + 2]) + rng.random_range(-0.05..0.05))
-                    .clamp(lim[k].0, lim[k].1)
-            })
-        })
-        .collect();
-    SynergyModel::fit(&rows, 5).unwrap().save(path).unwrap();
+    common::test_model().save(path).unwrap();
 }
 
 #[test]
