@@ -20,7 +20,7 @@ fn sim_closes_lifts_and_reports_success() {
     assert!(ok, "{err}");
     assert!(out.contains("lift: SUCCESS"), "{out}");
     assert!(out.contains("tactile FMRLT"), "{out}");
-    assert!(out.contains("816 physics steps"), "{out}");
+    assert!(out.contains("600 physics steps"), "{out}");
 }
 
 #[test]
@@ -48,7 +48,7 @@ fn sim_json_has_steps_sensors_and_outcome() {
             .len(),
         20
     );
-    assert_eq!(v["physics_steps"], 816);
+    assert_eq!(v["physics_steps"], 600);
 }
 
 #[test]
