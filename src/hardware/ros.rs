@@ -319,6 +319,25 @@ impl RosHandArm {
     }
 }
 
+impl Drop for RosHandArm {
+    /// Closes the websocket with the close handshake (reading until the server's close
+    /// frame, at most `timeout_s`), so that nothing the client sent is lost to a reset.
+    fn drop(&mut self) {
+        if self.ws.close(None).is_err() {
+            return;
+        }
+        let end = self.now() + self.cfg.timeout_s;
+        while self.now() < end {
+            match self.ws.read() {
+                Ok(_) => {}
+                Err(tungstenite::Error::Io(e))
+                    if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                Err(_) => return,
+            }
+        }
+    }
+}
+
 fn numbers(v: &Value, field: &str) -> Result<Vec<f64>, HwError> {
     let arr = v.as_array().ok_or_else(|| HwError::InvalidReading {
         field: field.into(),
