@@ -15,6 +15,8 @@
 //! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout.
 //! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
+//! - [`run`]: grasp attempts on a hand-arm system: the simulator behind the hardware
+//!   interface, tactile calibration and the grasp pipeline of Sec. V-B.
 
 pub mod env;
 pub mod eval;
@@ -23,6 +25,7 @@ pub mod objects;
 pub mod policy;
 pub mod ppo;
 pub mod robot;
+pub mod run;
 pub mod sim;
 pub mod synergy;
 pub mod train;

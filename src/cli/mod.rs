@@ -4,11 +4,13 @@
 use clap::{Args, Parser, Subcommand};
 
 mod bench;
+mod calibrate;
 mod eval;
 mod objects;
 mod pca;
 mod robot;
 mod rollout;
+mod run;
 mod sim;
 mod train;
 
@@ -59,6 +61,10 @@ pub enum Command {
     Eval(eval::EvalArgs),
     /// Train a policy with PPO from a config file into a run folder.
     Train(train::TrainArgs),
+    /// Run one grasp attempt of a policy on the simulated or the real robot (Sec. V-B).
+    Run(run::RunArgs),
+    /// Calibrate the fingertip tactile sensors (Sec. V-C) and save the calibration.
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -93,5 +99,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Eval(a) => eval::run(a, &global),
         Command::Objects(a) => objects::run(a, &global),
         Command::Train(a) => train::run(a, &global),
+        Command::Run(a) => run::run(a, &global),
+        Command::Calibrate(a) => calibrate::run(a, &global),
     }
 }

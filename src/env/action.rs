@@ -9,6 +9,7 @@
 //!
 //! `rho = 1` asks to lift; the continuous part is then ignored (eq. 3 masks it).
 
+use crate::synergy::SynergyModel;
 use serde::{Deserialize, Serialize};
 
 /// Scales of the continuous action.
@@ -62,9 +63,74 @@ pub fn decode(cfg: &ActionConfig, std: &[f64], raw: &[f32], lift: bool) -> Decod
     }
 }
 
+/// The action's unit per synergy component: `sqrt(lambda_k)` of the model's first `n`
+/// components (negative round-off eigenvalues count as 0).
+pub fn component_std(model: &SynergyModel) -> Vec<f64> {
+    model.eigenvalues()[..model.n_components()]
+        .iter()
+        .map(|l| l.max(0.0).sqrt())
+        .collect()
+}
+
+/// The 24 hand targets of a continuous action `raw` (`n + 2` policy outputs) at the
+/// measured angles `q` (paper order): the fingers by eq. 2,
+/// `P^-1(d_eps + P(theta_f))` made feasible for `finger_limits`, the wrist by
+/// `q_w + d_theta_w` clamped to `wrist_limits`. The environment and the robot pipeline
+/// both use this function, so a policy acts identically in both.
+pub fn hand_targets(
+    cfg: &ActionConfig,
+    std: &[f64],
+    model: &SynergyModel,
+    finger_limits: &[(f64, f64); 22],
+    wrist_limits: &[(f64, f64); 2],
+    q: &[f64; 24],
+    raw: &[f32],
+) -> [f64; 24] {
+    let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
+    let d = decode(cfg, std, raw, false);
+    let target_f = model.target(&theta_f, &d.d_eps, finger_limits);
+    let mut targets = [0.0; 24];
+    for (w, (lo, hi)) in wrist_limits.iter().enumerate() {
+        targets[w] = (q[w] + d.d_wrist[w]).clamp(*lo, *hi);
+    }
+    targets[2..].copy_from_slice(&target_f);
+    targets
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hand_targets_zero_action_projects_and_wrist_increments_clamp() {
+        let model = crate::synergy::default_model().truncated(5).unwrap();
+        let std = component_std(&model);
+        assert_eq!(std.len(), 5);
+        assert!((std[0] - model.eigenvalues()[0].sqrt()).abs() < 1e-15);
+        let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
+        let fl = robot.finger_limits();
+        let hl = robot.hand_limits();
+        let wl = [hl[0], hl[1]];
+        let q = crate::robot::Posture::CShape.angles();
+        // Zero synergy increments: the fingers go to the feasible projection of theta_f;
+        // wrist increments of +1 unit = +0.05 rad, WRJ2 clamped at its upper limit.
+        let mut qw = q;
+        qw[0] = wl[0].1 - 0.01;
+        let t = hand_targets(
+            &ActionConfig::default(),
+            &std,
+            &model,
+            &fl,
+            &wl,
+            &qw,
+            &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
+        );
+        assert_eq!(t[0], wl[0].1);
+        assert!((t[1] - (qw[1] + 0.05)).abs() < 1e-12);
+        let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
+        let expect = model.target(&theta_f, &[0.0; 5], &fl);
+        assert_eq!(&t[2..], &expect[..]);
+    }
 
     #[test]
     fn decode_clips_and_scales_hand_computed() {

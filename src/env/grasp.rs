@@ -17,7 +17,7 @@
 // ObjectSpec is Copy today but is meant to carry convex hulls; keep the explicit clones.
 #![allow(clippy::clone_on_copy)]
 
-use super::action::{clip_unit, decode, ActionConfig};
+use super::action::{clip_unit, component_std, hand_targets, ActionConfig};
 use super::api::{Action, ActionSpec, Env, Step, StepInfo};
 use super::curriculum::{Curriculum, CurriculumConfig};
 use super::obs::{FrameStack, Modality, ObsLayout};
@@ -167,6 +167,16 @@ pub struct EpisodeSummary {
     pub touched_in_stage1: bool,
 }
 
+/// Target of joint `j` at update `i` of `n` along the closing trajectory T from `start`
+/// to `closed`: a smoothstep path `start + a (closed - start)` with
+/// `a = s^2 (3 - 2 s)`, `s = min(i / n, 1)` (held at `closed` for `i > n`). Stage 1 of the
+/// environment and of the robot pipeline both follow it.
+pub fn closing_target(start: &[f64; 24], closed: &[f64; 24], j: usize, i: usize, n: usize) -> f64 {
+    let s = (i as f64 / n.max(1) as f64).min(1.0);
+    let a = s * s * (3.0 - 2.0 * s);
+    start[j] + a * (closed[j] - start[j])
+}
+
 /// The grasping environment for one simulated hand.
 pub struct GraspEnv {
     cfg: EnvConfig,
@@ -207,10 +217,7 @@ impl GraspEnv {
         let sim = HandSim::new(robot, first, sim_cfg)?;
         let layout = ObsLayout::new(cfg.modality, synergy.n_components(), cfg.history);
         let stack = FrameStack::new(&layout);
-        let eps_std = synergy.eigenvalues()[..synergy.n_components()]
-            .iter()
-            .map(|l| l.max(0.0).sqrt())
-            .collect();
+        let eps_std = component_std(&synergy);
         let limits = robot.hand_limits();
         Ok(GraspEnv {
             start: posture.angles(),
@@ -305,9 +312,7 @@ impl GraspEnv {
     /// Target of joint `j` at update `i` of `n` along T: a smooth (smoothstep) path from the
     /// start posture to the power grasp, held at the end for `i > n`.
     fn closing_target(&self, j: usize, i: usize, n: usize) -> f64 {
-        let s = (i as f64 / n as f64).min(1.0);
-        let a = s * s * (3.0 - 2.0 * s);
-        self.start[j] + a * (self.closed[j] - self.start[j])
+        closing_target(&self.start, &self.closed, j, i, n)
     }
 
     /// Stage 1: follows the closing trajectory T until any fingertip touches the object.
@@ -479,13 +484,16 @@ impl Env for GraspEnv {
         }
         let s = self.sim.sensors();
         let theta_f: [f64; 22] = std::array::from_fn(|k| s.q[k + 2]);
-        let d = decode(&self.cfg.action, &self.eps_std, &a.cont, false);
-        let target_f = self.synergy.target(&theta_f, &d.d_eps, &self.finger_limits);
-        let mut targets = [0.0; 24];
-        for (w, (lo, hi)) in self.wrist_limits.iter().enumerate() {
-            targets[w] = (s.q[w] + d.d_wrist[w]).clamp(*lo, *hi);
-        }
-        targets[2..].copy_from_slice(&target_f);
+        let targets = hand_targets(
+            &self.cfg.action,
+            &self.eps_std,
+            &self.synergy,
+            &self.finger_limits,
+            &self.wrist_limits,
+            &s.q,
+            &a.cont,
+        );
+        let target_f: [f64; 22] = std::array::from_fn(|k| targets[k + 2]);
         if self.sim.set_targets(&targets).is_err() || !self.sim.step_control() {
             return self.failed_step();
         }
@@ -568,4 +576,23 @@ pub fn run_episode(env: &mut GraspEnv, agent: &mut dyn Agent, seed: u64) -> Epis
     env.last_episode()
         .cloned()
         .unwrap_or_else(|| unreachable!("a finished episode has a summary"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closing_target_is_a_smoothstep_hand_computed() {
+        let start = [0.0; 24];
+        let mut closed = [0.0; 24];
+        closed[3] = 2.0;
+        // s = 1/2 -> a = 0.25 * 2 = 0.5 -> 1.0; s = 1/4 -> a = 0.0625 * 2.5 = 0.15625.
+        assert!((closing_target(&start, &closed, 3, 2, 4) - 1.0).abs() < 1e-12);
+        assert!((closing_target(&start, &closed, 3, 1, 4) - 0.3125).abs() < 1e-12);
+        assert_eq!(closing_target(&start, &closed, 3, 0, 4), 0.0);
+        // Held at the end.
+        assert_eq!(closing_target(&start, &closed, 3, 9, 4), 2.0);
+        assert_eq!(closing_target(&start, &closed, 5, 2, 4), 0.0);
+    }
 }

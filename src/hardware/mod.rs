@@ -13,11 +13,15 @@
 //! - [`log`]: JSON-lines attempt logs that survive a crash.
 //! - [`pointcloud`]: PCD/PLY readers, normals, antipodal two-finger grasp candidates.
 //! - [`partial_view`]: synthetic surface samples and partial-view clouds with noise.
+//! - `ros` (cargo feature `ros`): a rosbridge v2 client implementing [`HandArm`] for the
+//!   Shadow hand's ROS 1 driver and the UR10e.
 
 pub mod calibration;
 pub mod log;
 pub mod partial_view;
 pub mod pointcloud;
+#[cfg(feature = "ros")]
+pub mod ros;
 pub mod safety;
 pub mod torque;
 
@@ -200,6 +204,33 @@ pub trait HandArm {
     /// The backend clock in seconds (wall clock on the robot, simulated time in the
     /// simulator or in tests). Reading stamps use this clock.
     fn now(&self) -> f64;
+    /// Lets `seconds` pass on the backend clock while the last commands act: the default
+    /// sleeps the calling thread (a real robot moves on its own); the simulator steps its
+    /// physics instead. Non-finite or negative durations are an
+    /// [`HwError::InvalidCommand`].
+    fn wait(&mut self, seconds: f64) -> Result<(), HwError> {
+        check_duration(seconds)?;
+        std::thread::sleep(std::time::Duration::from_secs_f64(seconds));
+        Ok(())
+    }
+    /// Whether the object was held after the last [`ArmMotion::Lift`], where the backend
+    /// knows the truth (the simulator does); `None` (the default) on a real robot, where
+    /// the caller judges from the sensors.
+    fn lift_outcome(&self) -> Option<bool> {
+        None
+    }
+}
+
+/// Checks a [`HandArm::wait`] duration: finite and non-negative.
+pub fn check_duration(seconds: f64) -> Result<(), HwError> {
+    if seconds.is_finite() && seconds >= 0.0 {
+        Ok(())
+    } else {
+        Err(HwError::InvalidCommand {
+            field: "wait seconds".into(),
+            detail: format!("{seconds} is not a finite non-negative duration"),
+        })
+    }
 }
 
 #[cfg(test)]

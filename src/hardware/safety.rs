@@ -384,6 +384,29 @@ impl<B: HandArm> HandArm for SafeHandArm<B> {
     fn now(&self) -> f64 {
         self.backend.now()
     }
+
+    /// Waits in slices of at most half the watchdog timeout and reads after each slice,
+    /// so that stale sensor data stops the robot within the timeout even during a long
+    /// wait.
+    fn wait(&mut self, seconds: f64) -> Result<(), HwError> {
+        self.check_estop()?;
+        super::check_duration(seconds)?;
+        let slice = self.watchdog.timeout_s() / 2.0;
+        let mut left = seconds;
+        while left > 0.0 {
+            let s = left.min(slice);
+            if let Err(e) = self.backend.wait(s) {
+                return self.fail(e);
+            }
+            left -= s;
+            self.read()?;
+        }
+        Ok(())
+    }
+
+    fn lift_outcome(&self) -> Option<bool> {
+        self.backend.lift_outcome()
+    }
 }
 
 #[cfg(test)]

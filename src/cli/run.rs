@@ -1,0 +1,408 @@
+//! `grasp run`: one grasp attempt of a trained policy on the simulated or the real robot
+//! (Sec. V-B): plan a two-finger grasp, map it to the hand, stage 1, the policy, the lift.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use grasp::hardware::calibration::{TactileCalibration, DEFAULT_THRESHOLD_FRACTION};
+use grasp::hardware::log::AttemptLog;
+use grasp::hardware::pointcloud::{write_pcd, PcdData, PointCloud};
+use grasp::hardware::safety::SafeHandArm;
+use grasp::hardware::HandArm;
+use grasp::robot::{Robot, Side};
+use grasp::run::calibrate::{calibrate_tactile, CalibrationReport};
+use grasp::run::pipeline::{
+    load_grasp_file, plan_grasp, run_attempt, GraspFile, GraspPlan, GraspSource, PipelineConfig,
+    PolicyRunner,
+};
+use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
+use grasp::sim::{ObjectSpec, SimConfig};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use super::Global;
+
+/// Which hand-arm system to drive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// The simulator with a raw-sensor model.
+    Sim,
+    /// The Shadow hand's ROS 1 driver and the UR10e through rosbridge (feature `ros`).
+    Ros,
+}
+
+/// Run one grasp attempt of a trained policy on the simulated or the real robot.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:
+  grasp run --backend sim --object box_gelatin
+  grasp run --backend sim --object box_gelatin --cloud scan.pcd --log attempt.jsonl --json
+  grasp run --backend sim --center 0,0,0.02 --closing 1,0,0 --calibration tactile.json
+  grasp run --backend ros --ros-url ws://robot:9090 --grasp grasp.toml --calibration tactile.json
+
+With the sim backend and no grasp or cloud, the cloud is what two simulated depth
+cameras see of the object (noisy, partial); --save-cloud writes it as PCD. Without
+--calibration the sim backend calibrates its fingertips first (as `grasp calibrate`).
+A grasp file is TOML or JSON: center = [x, y, z], closing = [x, y, z], and optionally
+approach = [x, y, z] (default [0, 0, -1]), world frame, metres. Every step is appended
+to the attempt log (JSON lines). The sim backend places the hand palm down only, so its
+grasps are made top-down.")]
+pub struct RunArgs {
+    /// The robot: sim or ros.
+    #[arg(long, value_enum, default_value = "sim")]
+    pub backend: Backend,
+    /// Checkpoint folder of the policy.
+    #[arg(long, default_value = "assets/policies/quick_gru_m3_pca5")]
+    pub policy: PathBuf,
+    /// Two-finger grasp file (TOML or JSON).
+    #[arg(long, conflicts_with_all = ["cloud", "center"])]
+    pub grasp: Option<PathBuf>,
+    /// Point cloud of the object (PCD or PLY, world frame) to plan the grasp on.
+    #[arg(long, conflicts_with = "center")]
+    pub cloud: Option<PathBuf>,
+    /// Grasp centre x,y,z (m): a grasp given on the command line (with --closing).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "X,Y,Z",
+        allow_negative_numbers = true,
+        requires = "closing"
+    )]
+    pub center: Option<Vec<f64>>,
+    /// Closing direction x,y,z of a command-line grasp.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "X,Y,Z",
+        allow_negative_numbers = true,
+        requires = "center"
+    )]
+    pub closing: Option<Vec<f64>>,
+    /// Approach direction x,y,z of a command-line grasp (default straight down).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "X,Y,Z",
+        allow_negative_numbers = true,
+        requires = "center"
+    )]
+    pub approach: Option<Vec<f64>>,
+    /// Tactile calibration file (from `grasp calibrate`).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// Object in the simulator: box, cylinder or a library object name.
+    #[arg(long, default_value = "box_gelatin")]
+    pub object: String,
+    /// Attempt log (JSON lines, appended).
+    #[arg(long, default_value = "attempt.jsonl")]
+    pub log: PathBuf,
+    /// Pipeline config (TOML, see `PipelineConfig`); defaults when absent.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Simulator config (TOML); built-in defaults when absent.
+    #[arg(long)]
+    pub sim_config: Option<PathBuf>,
+    /// Write the point cloud the grasp was planned on (sim cameras or --cloud) as PCD.
+    #[arg(long)]
+    pub save_cloud: Option<PathBuf>,
+    /// rosbridge websocket of the robot (ros backend).
+    #[arg(long, default_value = "ws://localhost:9090")]
+    pub ros_url: String,
+}
+
+/// The object for the sim backend: `box`, `cylinder` or one library object.
+pub fn sim_object(name: &str) -> Result<ObjectSpec> {
+    match name.trim() {
+        "box" => return Ok(ObjectSpec::default_box()),
+        "cylinder" => return Ok(ObjectSpec::default_cylinder()),
+        _ => {}
+    }
+    let mut objs = super::rollout::sim_objects(name)?;
+    if objs.len() != 1 {
+        bail!(
+            "--object `{name}` holds {} objects; it must name exactly one",
+            objs.len()
+        );
+    }
+    Ok(objs.remove(0).1)
+}
+
+/// Loads the simulator config (defaults when absent).
+pub fn sim_config(path: Option<&PathBuf>) -> Result<SimConfig> {
+    match path {
+        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display())),
+        None => Ok(SimConfig::default()),
+    }
+}
+
+/// The simulated hand-arm with the raw-sensor model seeded by `seed`.
+pub fn sim_backend(object: ObjectSpec, sim_cfg: SimConfig, seed: u64) -> Result<SimHandArm> {
+    let mut cfg = SimBackendConfig::default();
+    cfg.raw.seed = seed;
+    let robot = Robot::builtin(Side::Left);
+    SimHandArm::new(&robot, object, sim_cfg, cfg).context("building the simulated robot")
+}
+
+/// Calibrates the simulated fingertips: `still` readings 20 ms apart, then each
+/// fingertip pressed with a known force (`press_n` newtons, `presses` readings each).
+pub fn calibrate_sim(
+    arm: &mut SimHandArm,
+    still: usize,
+    fraction: f64,
+    press_n: f64,
+    presses: usize,
+) -> Result<CalibrationReport> {
+    calibrate_tactile(arm, still, 0.02, fraction, |a, finger| {
+        (0..presses)
+            .map(|_| a.read_pressed(finger, press_n).map_err(Into::into))
+            .collect()
+    })
+    .context("calibrating the simulated fingertips")
+}
+
+/// The error of `--backend ros` in a build without the `ros` feature.
+pub const NO_ROS: &str =
+    "the ros backend is not part of this build: rebuild with `cargo build --release --features ros`";
+
+/// Connects to the robot's rosbridge.
+#[cfg(feature = "ros")]
+pub fn connect_ros(url: &str) -> Result<grasp::hardware::ros::RosHandArm> {
+    grasp::hardware::ros::RosHandArm::connect(url, grasp::hardware::ros::RosConfig::default())
+        .with_context(|| format!("connecting to rosbridge at {url}"))
+}
+
+fn pipeline_config(a: &RunArgs, sim: Option<&SimConfig>) -> Result<PipelineConfig> {
+    let mut cfg: PipelineConfig = match &a.config {
+        Some(p) => grasp::util::config::load_toml(p)
+            .with_context(|| format!("loading pipeline config {}", p.display()))?,
+        None => PipelineConfig::default(),
+    };
+    if let Some(s) = sim {
+        // The simulator's hand goes palm down only, acts for its control period and
+        // lifts as configured.
+        cfg.top_down_only = true;
+        cfg.control_period_s = s.control_period;
+        cfg.lift_height_m = s.lift.height;
+        cfg.lift_duration_s = s.lift.ramp_time + s.lift.hold_time;
+    }
+    cfg.validate().with_context(|| match &a.config {
+        Some(p) => format!("pipeline config {}", p.display()),
+        None => "pipeline config".into(),
+    })?;
+    Ok(cfg)
+}
+
+fn given_source(a: &RunArgs) -> Result<Option<GraspSource>> {
+    if let Some(p) = &a.grasp {
+        let g = load_grasp_file(p)?;
+        return Ok(Some(GraspSource::Given(g)));
+    }
+    if let Some(p) = &a.cloud {
+        let c =
+            PointCloud::load(p).with_context(|| format!("loading point cloud {}", p.display()))?;
+        return Ok(Some(GraspSource::Cloud(c.points)));
+    }
+    if let (Some(c), Some(cl)) = (&a.center, &a.closing) {
+        let v3 = |v: &Vec<f64>, name: &str| -> Result<[f64; 3]> {
+            v.as_slice()
+                .try_into()
+                .with_context(|| format!("--{name} takes three numbers x,y,z"))
+        };
+        let f = GraspFile {
+            center: v3(c, "center")?,
+            closing: v3(cl, "closing")?,
+            approach: match &a.approach {
+                Some(ap) => v3(ap, "approach")?,
+                None => [0.0, 0.0, -1.0],
+            },
+        };
+        return Ok(Some(GraspSource::Given(
+            f.grasp().context("the command-line grasp")?,
+        )));
+    }
+    Ok(None)
+}
+
+fn save_cloud(path: &Path, source: &GraspSource) -> Result<()> {
+    if let GraspSource::Cloud(points) = source {
+        write_pcd(path, points, PcdData::Ascii)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+pub fn run(a: RunArgs, g: &Global) -> Result<()> {
+    let seed = g.seed.unwrap_or(0);
+    let robot = Robot::builtin(Side::Left);
+    let mut policy = PolicyRunner::load(&a.policy)
+        .with_context(|| format!("loading policy {}", a.policy.display()))?;
+    let calibration = match &a.calibration {
+        Some(p) => Some(TactileCalibration::load(p)?),
+        None => None,
+    };
+    let source = given_source(&a)?;
+    match a.backend {
+        Backend::Sim => {
+            let sim_cfg = sim_config(a.sim_config.as_ref())?;
+            let cfg = pipeline_config(&a, Some(&sim_cfg))?;
+            let mut arm = sim_backend(sim_object(&a.object)?, sim_cfg, seed)?;
+            let (calibration, calibrated_now) = match calibration {
+                Some(c) => (c, false),
+                None => (
+                    calibrate_sim(&mut arm, 10, DEFAULT_THRESHOLD_FRACTION, 10.0, 5)?.calibration,
+                    true,
+                ),
+            };
+            let source = match source {
+                Some(s) => s,
+                None => GraspSource::Cloud(
+                    arm.camera_cloud(&CameraConfig::default(), seed)
+                        .context("simulating the depth cameras")?,
+                ),
+            };
+            if let Some(p) = &a.save_cloud {
+                save_cloud(p, &source)?;
+            }
+            let plan = plan(&robot, &source, &cfg, &policy, seed)?;
+            attempt(
+                arm,
+                &robot,
+                &plan,
+                &mut policy,
+                &calibration,
+                &cfg,
+                &a,
+                g,
+                calibrated_now,
+            )?;
+            Ok(())
+        }
+        Backend::Ros => {
+            if !cfg!(feature = "ros") {
+                bail!(NO_ROS);
+            }
+            let Some(calibration) = calibration else {
+                bail!("the ros backend needs --calibration FILE (make one with `grasp calibrate --backend ros --out FILE`)");
+            };
+            let Some(source) = source else {
+                bail!("the ros backend needs a grasp: --grasp FILE, --cloud FILE or --center/--closing");
+            };
+            if let Some(p) = &a.save_cloud {
+                save_cloud(p, &source)?;
+            }
+            let cfg = pipeline_config(&a, None)?;
+            let plan = plan(&robot, &source, &cfg, &policy, seed)?;
+            #[cfg(feature = "ros")]
+            {
+                let arm = connect_ros(&a.ros_url)?;
+                attempt(
+                    arm,
+                    &robot,
+                    &plan,
+                    &mut policy,
+                    &calibration,
+                    &cfg,
+                    &a,
+                    g,
+                    false,
+                )?;
+            }
+            #[cfg(not(feature = "ros"))]
+            let _ = (plan, calibration);
+            Ok(())
+        }
+    }
+}
+
+fn plan(
+    robot: &Robot,
+    source: &GraspSource,
+    cfg: &PipelineConfig,
+    policy: &PolicyRunner,
+    seed: u64,
+) -> Result<GraspPlan> {
+    let mut cfg = cfg.clone();
+    cfg.antipodal.seed = seed;
+    let preshape = cfg.preshape_angles(policy.env_config())?;
+    plan_grasp(robot, source, &preshape, &cfg).context("planning the grasp")
+}
+
+#[allow(clippy::too_many_arguments)]
+fn attempt<B: HandArm>(
+    backend: B,
+    robot: &Robot,
+    plan: &GraspPlan,
+    policy: &mut PolicyRunner,
+    calibration: &TactileCalibration,
+    cfg: &PipelineConfig,
+    a: &RunArgs,
+    g: &Global,
+    calibrated_now: bool,
+) -> Result<bool> {
+    let mut arm = SafeHandArm::new(
+        backend,
+        robot.hand_limits(),
+        cfg.safety,
+        Arc::new(AtomicBool::new(false)),
+    )?;
+    let mut log = AttemptLog::open(&a.log)?;
+    let out = run_attempt(&mut arm, robot, plan, policy, calibration, cfg, &mut log)
+        .context("grasp attempt failed")?;
+    if g.json {
+        let j = serde_json::json!({
+            "backend": format!("{:?}", a.backend).to_lowercase(),
+            "policy": a.policy,
+            "object": (a.backend == Backend::Sim).then_some(&a.object),
+            "calibrated_now": calibrated_now,
+            "plan": plan,
+            "outcome": out,
+            "log": a.log,
+        });
+        println!("{}", serde_json::to_string_pretty(&j)?);
+    } else {
+        let where_ = if a.backend == Backend::Sim {
+            format!(" on {}", a.object)
+        } else {
+            String::new()
+        };
+        println!(
+            "grasp at ({:.3}, {:.3}, {:.3}) m, closing ({:.2}, {:.2}, {:.2}){}",
+            plan.center[0],
+            plan.center[1],
+            plan.center[2],
+            plan.closing[0],
+            plan.closing[1],
+            plan.closing[2],
+            match plan.score {
+                Some(s) => format!(
+                    ", score {s:.3} (best reachable of {} candidates)",
+                    plan.candidates
+                ),
+                None => String::new(),
+            }
+        );
+        println!(
+            "stage 1: {} updates, {}; policy: {} steps, {}; {} clamped commands",
+            out.stage1_updates,
+            if out.touched { "touched" } else { "no touch" },
+            out.policy_steps,
+            if out.lifted { "lifted" } else { "no lift" },
+            out.clamped_commands
+        );
+        println!(
+            "{}{}: {} ({}; judged by the {}), {:.2} s, {} log lines in {}",
+            if out.success { "SUCCESS" } else { "FAILURE" },
+            where_,
+            out.reason,
+            if calibrated_now {
+                "calibrated now"
+            } else {
+                "calibration file"
+            },
+            out.judged_by,
+            out.time_s,
+            out.log_lines,
+            a.log.display()
+        );
+    }
+    Ok(out.success)
+}

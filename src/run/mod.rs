@@ -1,0 +1,93 @@
+//! Grasp attempts on a hand-arm system: the simulator behind the hardware interface and
+//! the grasp pipeline of Sec. V-B that runs on any [`HandArm`](crate::hardware::HandArm).
+//!
+//! The dependencies flow `cli -> run -> {env, sim, hardware, ppo}`: [`crate::hardware`]
+//! knows nothing of the physics engine, so the simulator backend lives here.
+//!
+//! - [`sim_backend`]: [`SimHandArm`](sim_backend::SimHandArm), the Rapier simulation
+//!   with a raw-sensor model (tactile offsets, gains and noise, drifting tendon forces),
+//!   a simulated clock and a sensor-dropout switch for the watchdog.
+//! - [`calibrate`]: the tactile calibration procedure of Sec. V-C on any backend.
+//! - [`pipeline`]: grasp planning (a given two-finger grasp or antipodal candidates on a
+//!   point cloud, the hand mapping, UR10e IK) and the attempt (stage 1, the policy, the
+//!   lift), logged step by step.
+
+pub mod calibrate;
+pub mod pipeline;
+pub mod sim_backend;
+
+use crate::hardware::calibration::CalibrationError;
+use crate::hardware::log::LogError;
+use crate::hardware::pointcloud::CloudError;
+use crate::hardware::torque::TorqueError;
+use crate::hardware::HwError;
+use std::path::PathBuf;
+
+/// Error of a grasp attempt, a calibration or their setup. Every variant names what
+/// failed (file, field or stage).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The robot (or the simulator behind the interface) reported an error.
+    #[error(transparent)]
+    Hw(#[from] HwError),
+    /// The tactile calibration failed or its file is bad.
+    #[error(transparent)]
+    Calibration(#[from] CalibrationError),
+    /// The tendon readings could not be mapped.
+    #[error(transparent)]
+    Torque(#[from] TorqueError),
+    /// The point cloud is unusable.
+    #[error(transparent)]
+    Cloud(#[from] CloudError),
+    /// The attempt log could not be written.
+    #[error(transparent)]
+    Log(#[from] LogError),
+    /// The simulator refused its setup.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    /// A grasp file is missing or malformed.
+    #[error("grasp file {path}: {detail}")]
+    GraspFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong (field, line and column where known).
+        detail: String,
+    },
+    /// The grasp itself is unusable (degenerate directions, NaN).
+    #[error("invalid grasp: {0}")]
+    BadGrasp(String),
+    /// UR10e inverse kinematics found no solution for a pose of the attempt.
+    #[error("the UR10e cannot reach the {stage} pose of the grasp at ({x:.3}, {y:.3}, {z:.3}) m: {source}")]
+    Ik {
+        /// `approach` or `pre-grasp`.
+        stage: &'static str,
+        /// Grasp centre x (m, world frame).
+        x: f64,
+        /// Grasp centre y (m).
+        y: f64,
+        /// Grasp centre z (m).
+        z: f64,
+        /// The IK error.
+        #[source]
+        source: crate::robot::ur10e::IkError,
+    },
+    /// No grasp candidate of the cloud is usable.
+    #[error("no usable grasp: {0}")]
+    NoGrasp(String),
+    /// The policy checkpoint cannot be used.
+    #[error("policy {path}: {detail}")]
+    Policy {
+        /// The checkpoint folder.
+        path: PathBuf,
+        /// What is wrong.
+        detail: String,
+    },
+    /// A configuration value is out of range.
+    #[error("invalid {field}: {detail}")]
+    Config {
+        /// The field.
+        field: String,
+        /// What is wrong.
+        detail: String,
+    },
+}

@@ -1,0 +1,831 @@
+//! The grasp pipeline of Sec. V-B on any [`HandArm`], through [`SafeHandArm`].
+//!
+//! **Planning** ([`plan_grasp`]): a two-finger grasp is given (a grasp file, see
+//! [`load_grasp_file`], or the command line) or sampled on a point cloud with the
+//! antipodal sampler ([`grasp_candidates`]); it is mapped to the hand
+//! ([`root_pose_for`]: C-shape preshape, grasp point between the thumb and little-finger
+//! tips, x = -palm normal, y along thumb-little finger), and the UR10e IK is solved for the
+//! pre-grasp pose (the grasp pose moved back along the approach by `pregrasp_offset_m`) and
+//! the grasp pose. A given grasp the arm cannot reach is an error; cloud candidates are
+//! tried best first until one is reachable.
+//!
+//! **Attempt** ([`run_attempt`]):
+//! 1. drift compensation: `tau_j0` is the mean of `baseline_readings` tendon readings with
+//!    the empty hand, still, at the start of the attempt;
+//! 2. the fingers take the preshape (in steps of at most the safety limiter's maximum
+//!    change, each clamp logged), the arm moves to the pre-grasp and grasp poses;
+//! 3. stage 1: the closing trajectory T of the environment
+//!    ([`closing_target`], from the preshape to the power grasp) until any fingertip is in
+//!    contact (calibrated tactile threshold);
+//! 4. stage 2: the policy acts on the SAME observation as in simulation
+//!    ([`ObsLayout::frame`], [`FrameStack`]) built from the mapped sensors (calibrated
+//!    contacts, drift-compensated torque levels, joint angles), and its action becomes
+//!    hand targets through the SAME eq.-2 mapping ([`hand_targets`]), until it decides to
+//!    lift or `max_steps` pass (then the attempt fails, as an environment episode is
+//!    truncated);
+//! 5. the lift; the outcome is the backend's judgement where it has one (the simulator:
+//!    object held after the lift), otherwise the fingertips: held when at least
+//!    `held_min_contacts` report contact after the lift.
+//!
+//! Every reading, action, target and clamp event is a line of the [`AttemptLog`], and the
+//! attempt ends with an outcome line, also when it fails with an error.
+
+use super::RunError;
+use crate::env::action::{clip_unit, component_std, hand_targets};
+use crate::env::grasp::{closing_target, Agent, EnvConfig};
+use crate::env::obs::{FrameStack, ObsLayout};
+use crate::eval::PolicyAgent;
+use crate::hardware::calibration::TactileCalibration;
+use crate::hardware::log::{AttemptLog, OutcomeRecord, StepRecord};
+use crate::hardware::pointcloud::{grasp_candidates, AntipodalConfig};
+use crate::hardware::safety::{SafeHandArm, SafetyConfig};
+use crate::hardware::torque::{TorqueMapper, REAL_THRESHOLDS};
+use crate::hardware::{ArmMotion, HandArm, RawSensors, N_HAND_JOINTS, N_TENDONS};
+use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
+use crate::robot::{ur10e, Posture, Robot};
+use crate::sim::script;
+use crate::synergy::SynergyModel;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Pose of the UR10e base in the world: a position and a yaw about the vertical.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ArmBase {
+    /// Base position (m).
+    pub xyz: [f64; 3],
+    /// Base yaw about world z (rad).
+    pub yaw: f64,
+}
+
+impl Default for ArmBase {
+    /// The base 0.7 m from the object along world -y, on the table plane.
+    fn default() -> Self {
+        ArmBase {
+            xyz: [0.0, -0.7, 0.0],
+            yaw: 0.0,
+        }
+    }
+}
+
+impl ArmBase {
+    /// The world-from-base transform.
+    pub fn pose(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(self.xyz[0], self.xyz[1], self.xyz[2]),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), self.yaw),
+        )
+    }
+}
+
+/// Settings of the pipeline (the closing trajectory, history, step limit and action
+/// scales come from the policy's environment config, see [`PolicyRunner`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PipelineConfig {
+    /// The UR10e base in the world frame of grasps and clouds.
+    pub arm_base: ArmBase,
+    /// Finger preshape before the approach: `policy` (the start posture of the policy's
+    /// training environment; stage 1 then starts where it started in training), `c-shape`
+    /// (the paper's preshape) or `open`.
+    pub preshape: String,
+    /// Distance of the pre-grasp pose behind the grasp pose, along the approach (m).
+    pub pregrasp_offset_m: f64,
+    /// Keep only (nearly) top-down cloud candidates and make them exactly top-down: for a
+    /// backend that places the hand palm down only (the simulator).
+    pub top_down_only: bool,
+    /// Largest tilt of a candidate's approach from straight down kept by
+    /// `top_down_only` (rad).
+    pub max_tilt_rad: f64,
+    /// Most cloud candidates tried (best score first) before giving up.
+    pub max_candidates: usize,
+    /// Empty-hand tendon readings averaged into `tau_j0`.
+    pub baseline_readings: usize,
+    /// Time between two baseline readings (s).
+    pub baseline_period_s: f64,
+    /// Duration of one policy action (s); the simulator's `control_period`.
+    pub control_period_s: f64,
+    /// Lift height (m).
+    pub lift_height_m: f64,
+    /// Lift duration (s).
+    pub lift_duration_s: f64,
+    /// Thresholds of the tendon levels (the paper's real-robot values by default).
+    pub torque_thresholds: [f64; 5],
+    /// Fingertips in contact after the lift for a sensor-judged success.
+    pub held_min_contacts: usize,
+    /// Most commands used to reach the preshape.
+    pub preshape_commands: usize,
+    /// The safety layer.
+    pub safety: SafetyConfig,
+    /// The antipodal sampler for clouds.
+    pub antipodal: AntipodalConfig,
+}
+
+impl Default for PipelineConfig {
+    fn default() -> Self {
+        PipelineConfig {
+            arm_base: ArmBase::default(),
+            preshape: "policy".into(),
+            pregrasp_offset_m: 0.10,
+            top_down_only: false,
+            max_tilt_rad: 0.35,
+            max_candidates: 30,
+            baseline_readings: crate::hardware::torque::DEFAULT_BASELINE_READINGS,
+            baseline_period_s: 0.02,
+            control_period_s: 0.2,
+            lift_height_m: 0.15,
+            lift_duration_s: 2.0,
+            torque_thresholds: REAL_THRESHOLDS,
+            held_min_contacts: 2,
+            preshape_commands: 12,
+            safety: SafetyConfig::default(),
+            antipodal: AntipodalConfig::default(),
+        }
+    }
+}
+
+impl PipelineConfig {
+    /// The preshape posture for a policy trained in `env`: `policy` (the default) is the
+    /// start posture the policy was trained from (its stage 1 starts there, as in
+    /// training), `c-shape` the paper's preshape, `open` the open hand. Errors on an
+    /// unknown name.
+    pub fn preshape_angles(&self, env: &EnvConfig) -> Result<[f64; 24], RunError> {
+        match self.preshape.as_str() {
+            "policy" => env
+                .validate()
+                .map(|p| p.angles())
+                .map_err(|e| RunError::Config {
+                    field: "preshape".into(),
+                    detail: format!("the policy's start posture: {e}"),
+                }),
+            "c-shape" => Ok(Posture::CShape.angles()),
+            "open" => Ok(Posture::Open.angles()),
+            other => Err(RunError::Config {
+                field: "preshape".into(),
+                detail: format!("unknown posture '{other}': expected policy, c-shape or open"),
+            }),
+        }
+    }
+
+    /// Checks every range; the error names the field.
+    pub fn validate(&self) -> Result<(), RunError> {
+        let bad = |field: &str, detail: String| {
+            Err(RunError::Config {
+                field: field.into(),
+                detail,
+            })
+        };
+        self.preshape_angles(&EnvConfig::default())?;
+        if !(self.arm_base.xyz.iter().all(|v| v.is_finite()) && self.arm_base.yaw.is_finite()) {
+            return bad("arm_base", "must be finite".into());
+        }
+        for (name, v) in [
+            ("pregrasp_offset_m", self.pregrasp_offset_m),
+            ("max_tilt_rad", self.max_tilt_rad),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, format!("{v} must be finite and >= 0"));
+            }
+        }
+        for (name, v) in [
+            ("baseline_period_s", self.baseline_period_s),
+            ("control_period_s", self.control_period_s),
+            ("lift_height_m", self.lift_height_m),
+            ("lift_duration_s", self.lift_duration_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, format!("{v} must be finite and > 0"));
+            }
+        }
+        if self.max_candidates == 0 || self.baseline_readings == 0 || self.preshape_commands == 0 {
+            return bad(
+                "max_candidates/baseline_readings/preshape_commands",
+                "must be at least 1".into(),
+            );
+        }
+        if self.held_min_contacts == 0 || self.held_min_contacts > 5 {
+            return bad(
+                "held_min_contacts",
+                format!("{} is outside 1..=5", self.held_min_contacts),
+            );
+        }
+        TorqueMapper::new(self.torque_thresholds)?;
+        Ok(())
+    }
+}
+
+/// A two-finger grasp as written in a grasp file (TOML or JSON, world frame, metres):
+/// `center = [x, y, z]`, `closing = [x, y, z]` (the direction joining the fingers) and
+/// optionally `approach = [x, y, z]` (default straight down, `[0, 0, -1]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GraspFile {
+    /// Grasp centre (m).
+    pub center: [f64; 3],
+    /// Approach direction.
+    #[serde(default = "down")]
+    pub approach: [f64; 3],
+    /// Closing direction.
+    pub closing: [f64; 3],
+}
+
+fn down() -> [f64; 3] {
+    [0.0, 0.0, -1.0]
+}
+
+impl GraspFile {
+    /// The grasp, checked: finite, non-degenerate directions.
+    pub fn grasp(&self) -> Result<TwoFingerGrasp, RunError> {
+        let g = TwoFingerGrasp {
+            center: Point3::from(self.center),
+            approach: Vector3::from(self.approach),
+            closing: Vector3::from(self.closing),
+        };
+        g.frame().map_err(|e| RunError::BadGrasp(e.to_string()))?;
+        Ok(g)
+    }
+}
+
+/// Reads a grasp file: JSON when the name ends in `.json`, TOML otherwise. Errors name
+/// the file and the field (with line and column).
+pub fn load_grasp_file(path: &Path) -> Result<TwoFingerGrasp, RunError> {
+    let err = |detail: String| RunError::GraspFile {
+        path: path.to_path_buf(),
+        detail,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let is_json = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let f: GraspFile = if is_json {
+        serde_json::from_str(&text).map_err(|e| err(e.to_string()))?
+    } else {
+        crate::util::config::parse_toml(path, &text).map_err(|e| err(e.to_string()))?
+    };
+    f.grasp().map_err(|e| err(e.to_string()))
+}
+
+/// Where the grasp comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GraspSource {
+    /// A given two-finger grasp.
+    Given(TwoFingerGrasp),
+    /// A point cloud of the object (world frame, m) to sample candidates on.
+    Cloud(Vec<Point3<f64>>),
+}
+
+/// A planned grasp: the two-finger grasp, the hand preshape and the arm configurations.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GraspPlan {
+    /// Grasp centre (m, world).
+    pub center: [f64; 3],
+    /// Approach direction (unit).
+    pub approach: [f64; 3],
+    /// Closing direction (unit).
+    pub closing: [f64; 3],
+    /// The candidate's score (cloud grasps only).
+    pub score: Option<f64>,
+    /// Candidates found on the cloud (0 for a given grasp).
+    pub candidates: usize,
+    /// Candidates skipped before this one (not top-down, unreachable).
+    pub skipped: usize,
+    /// The hand preshape (24 angles, paper order).
+    pub preshape: [f64; N_HAND_JOINTS],
+    /// UR10e joints at the pre-grasp pose.
+    pub pregrasp_q: [f64; 6],
+    /// UR10e joints at the grasp pose.
+    pub grasp_q: [f64; 6],
+}
+
+impl GraspPlan {
+    /// The two-finger grasp of the plan.
+    pub fn grasp(&self) -> TwoFingerGrasp {
+        TwoFingerGrasp {
+            center: Point3::from(self.center),
+            approach: Vector3::from(self.approach),
+            closing: Vector3::from(self.closing),
+        }
+    }
+}
+
+/// Arm configurations for `grasp` with the hand in `preshape`: (pre-grasp, grasp).
+fn solve_arm(
+    robot: &Robot,
+    preshape: &[f64; 24],
+    grasp: &TwoFingerGrasp,
+    cfg: &PipelineConfig,
+) -> Result<([f64; 6], [f64; 6]), RunError> {
+    let root =
+        root_pose_for(robot, preshape, grasp).map_err(|e| RunError::BadGrasp(e.to_string()))?;
+    let base_inv = cfg.arm_base.pose().inverse();
+    let back = -grasp.approach.normalize() * cfg.pregrasp_offset_m;
+    let pre = Isometry3::from_parts(
+        Translation3::from(root.translation.vector + back),
+        root.rotation,
+    );
+    let c = grasp.center;
+    let ik_err = |stage, source| RunError::Ik {
+        stage,
+        x: c.x,
+        y: c.y,
+        z: c.z,
+        source,
+    };
+    let q_pre = ur10e::ik(&(base_inv * pre), &ur10e::HOME).map_err(|e| ik_err("pre-grasp", e))?;
+    let q_grasp = ur10e::ik(&(base_inv * root), &q_pre).map_err(|e| ik_err("grasp", e))?;
+    Ok((q_pre, q_grasp))
+}
+
+/// Makes a candidate exactly top-down (approach -z, horizontal closing direction) if it is
+/// within `max_tilt` of it.
+fn snap_top_down(g: &TwoFingerGrasp, max_tilt: f64) -> Option<TwoFingerGrasp> {
+    let a = g.approach.try_normalize(1e-9)?;
+    if a.angle(&-Vector3::z()) > max_tilt {
+        return None;
+    }
+    let closing = Vector3::new(g.closing.x, g.closing.y, 0.0).try_normalize(1e-6)?;
+    Some(TwoFingerGrasp {
+        center: g.center,
+        approach: -Vector3::z(),
+        closing,
+    })
+}
+
+/// Plans the grasp (see the module docs) with the hand in `preshape` (see
+/// [`PipelineConfig::preshape_angles`]).
+pub fn plan_grasp(
+    robot: &Robot,
+    source: &GraspSource,
+    preshape: &[f64; N_HAND_JOINTS],
+    cfg: &PipelineConfig,
+) -> Result<GraspPlan, RunError> {
+    cfg.validate()?;
+    let preshape = *preshape;
+    let make = |g: &TwoFingerGrasp, score, candidates, skipped, q: ([f64; 6], [f64; 6])| {
+        let a = g.approach.normalize();
+        let c = (g.closing - a * a.dot(&g.closing)).normalize();
+        GraspPlan {
+            center: g.center.into(),
+            approach: a.into(),
+            closing: c.into(),
+            score,
+            candidates,
+            skipped,
+            preshape,
+            pregrasp_q: q.0,
+            grasp_q: q.1,
+        }
+    };
+    match source {
+        GraspSource::Given(g) => {
+            g.frame().map_err(|e| RunError::BadGrasp(e.to_string()))?;
+            let g = if cfg.top_down_only {
+                snap_top_down(g, cfg.max_tilt_rad).ok_or_else(|| {
+                    RunError::BadGrasp(format!(
+                        "this backend grasps top-down only: the approach must be within {:.2} rad of straight down and the closing direction not vertical",
+                        cfg.max_tilt_rad
+                    ))
+                })?
+            } else {
+                *g
+            };
+            let q = solve_arm(robot, &preshape, &g, cfg)?;
+            Ok(make(&g, None, 0, 0, q))
+        }
+        GraspSource::Cloud(points) => {
+            let cands = grasp_candidates(points, &cfg.antipodal)?;
+            if cands.is_empty() {
+                return Err(RunError::NoGrasp(format!(
+                    "the antipodal sampler found no two-finger grasp on the {} points of the cloud",
+                    points.len()
+                )));
+            }
+            let mut skipped = 0;
+            let mut first_err = None;
+            for c in cands.iter().take(cfg.max_candidates) {
+                let g = if cfg.top_down_only {
+                    match snap_top_down(&c.grasp, cfg.max_tilt_rad) {
+                        Some(g) => g,
+                        None => {
+                            skipped += 1;
+                            continue;
+                        }
+                    }
+                } else {
+                    c.grasp
+                };
+                match solve_arm(robot, &preshape, &g, cfg) {
+                    Ok(q) => return Ok(make(&g, Some(c.score), cands.len(), skipped, q)),
+                    Err(e) => {
+                        skipped += 1;
+                        first_err.get_or_insert(e.to_string());
+                    }
+                }
+            }
+            Err(RunError::NoGrasp(format!(
+                "{} candidates, none of the best {} usable{}{}",
+                cands.len(),
+                cfg.max_candidates.min(cands.len()),
+                if cfg.top_down_only {
+                    " (top-down only)"
+                } else {
+                    ""
+                },
+                first_err.map(|e| format!(": {e}")).unwrap_or_default()
+            )))
+        }
+    }
+}
+
+/// A trained policy with everything needed to act on a robot exactly as in its
+/// environment: the network and its observation normaliser, the synergy model, the
+/// environment config (history, modality, closing trajectory, action scales) and the
+/// observation layout.
+pub struct PolicyRunner {
+    agent: PolicyAgent,
+    synergy: SynergyModel,
+    eps_std: Vec<f64>,
+    env: EnvConfig,
+    layout: ObsLayout,
+    dir: PathBuf,
+}
+
+impl PolicyRunner {
+    /// Loads the checkpoint folder `dir` (`checkpoint.safetensors`, and beside it the
+    /// `config.toml` of its training run and its `synergy.json`; without them the
+    /// environment defaults and the shipped synergy model are used). The policy acts
+    /// deterministically (the mode of its distribution).
+    pub fn load(dir: &Path) -> Result<PolicyRunner, RunError> {
+        let perr = |detail: String| RunError::Policy {
+            path: dir.to_path_buf(),
+            detail,
+        };
+        if !dir.is_dir() {
+            return Err(perr("not a checkpoint folder (does not exist)".into()));
+        }
+        let loaded = crate::ppo::load_policy(dir).map_err(|e| perr(e.to_string()))?;
+        let spec = loaded.policy.action_spec();
+        if !spec.lift || spec.continuous < 3 {
+            return Err(perr(format!(
+                "not a grasping policy: {} continuous actions, lift {}",
+                spec.continuous, spec.lift
+            )));
+        }
+        let n = spec.continuous - 2;
+        let cfg_path = dir.join("config.toml");
+        let env = if cfg_path.is_file() {
+            let c = crate::train::config::TrainConfig::load(&cfg_path)
+                .map_err(|e| perr(e.to_string()))?;
+            if c.n_components != n {
+                return Err(perr(format!(
+                    "config.toml says {} synergy components but the network acts in {n}",
+                    c.n_components
+                )));
+            }
+            c.env.grasp
+        } else {
+            EnvConfig::default()
+        };
+        env.validate().map_err(|e| perr(e.to_string()))?;
+        let syn_path = dir.join("synergy.json");
+        let full = if syn_path.is_file() {
+            SynergyModel::load(&syn_path).map_err(|e| perr(e.to_string()))?
+        } else {
+            crate::synergy::default_model()
+        };
+        let synergy = full.truncated(n).map_err(|e| perr(e.to_string()))?;
+        let layout = ObsLayout::new(env.modality, n, env.history);
+        if layout.len() != loaded.policy.obs_dim() {
+            return Err(perr(format!(
+                "the network expects observations of length {}, but {:?} with {n} components and history {} gives {}",
+                loaded.policy.obs_dim(),
+                env.modality,
+                env.history,
+                layout.len()
+            )));
+        }
+        Ok(PolicyRunner {
+            agent: PolicyAgent::new(loaded, false, 0),
+            eps_std: component_std(&synergy),
+            synergy,
+            env,
+            layout,
+            dir: dir.to_path_buf(),
+        })
+    }
+
+    /// The environment config the policy was trained in.
+    pub fn env_config(&self) -> &EnvConfig {
+        &self.env
+    }
+
+    /// The observation layout.
+    pub fn layout(&self) -> &ObsLayout {
+        &self.layout
+    }
+
+    /// The checkpoint folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+}
+
+/// How an attempt ended.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AttemptOutcome {
+    /// The object was held after the lift.
+    pub success: bool,
+    /// Why the attempt ended.
+    pub reason: String,
+    /// Who judged: `simulator` or `tactile sensors`.
+    pub judged_by: String,
+    /// Stage-1 target updates until the first touch (or the end of T).
+    pub stage1_updates: usize,
+    /// Stage 1 ended on a fingertip contact.
+    pub touched: bool,
+    /// Policy steps (the lift decision included).
+    pub policy_steps: usize,
+    /// The policy decided to lift.
+    pub lifted: bool,
+    /// Hand commands the safety limiter changed.
+    pub clamped_commands: usize,
+    /// Lines written to the attempt log.
+    pub log_lines: u64,
+    /// Backend time at the end (s).
+    pub time_s: f64,
+}
+
+/// The mapped view of one reading.
+struct Mapped {
+    raw: RawSensors,
+    tactile: [bool; 5],
+    torque_mapped: [f64; N_TENDONS],
+    levels: [u8; N_TENDONS],
+}
+
+struct Attempt<'a, B: HandArm> {
+    arm: &'a mut SafeHandArm<B>,
+    calibration: &'a TactileCalibration,
+    mapper: TorqueMapper,
+    log: &'a mut AttemptLog,
+    step: u64,
+    clamped: usize,
+    last_sent: [f64; N_HAND_JOINTS],
+}
+
+impl<B: HandArm> Attempt<'_, B> {
+    fn read(&mut self) -> Result<Mapped, RunError> {
+        let raw = self.arm.read()?;
+        Ok(Mapped {
+            tactile: self.calibration.contacts(&raw.tactile_raw),
+            torque_mapped: self.mapper.mapped(&raw.tendon_raw)?,
+            levels: self.mapper.levels(&raw.tendon_raw)?,
+            raw,
+        })
+    }
+
+    /// Sends `targets` through the safety layer, lets `wait_s` pass, reads and logs.
+    fn command(
+        &mut self,
+        targets: &[f64; N_HAND_JOINTS],
+        action: Vec<f64>,
+        wait_s: f64,
+    ) -> Result<Mapped, RunError> {
+        self.arm.command_hand(targets)?;
+        let events = self.arm.last_clamp_events().to_vec();
+        let sent = applied(targets, &events);
+        if !events.is_empty() {
+            self.clamped += 1;
+        }
+        self.last_sent = sent;
+        self.arm.wait(wait_s)?;
+        let m = self.read()?;
+        self.log_step(&m, action, sent, events)?;
+        Ok(m)
+    }
+
+    fn log_step(
+        &mut self,
+        m: &Mapped,
+        action: Vec<f64>,
+        targets: [f64; N_HAND_JOINTS],
+        clamp_events: Vec<crate::hardware::safety::ClampEvent>,
+    ) -> Result<(), RunError> {
+        self.log.step(StepRecord {
+            step: self.step,
+            time_s: m.raw.stamp,
+            joint_angles: m.raw.joint_angles,
+            tactile_raw: m.raw.tactile_raw,
+            tendon_raw: m.raw.tendon_raw,
+            tactile: m.tactile,
+            torque_mapped: m.torque_mapped,
+            torque_levels: m.levels,
+            action,
+            targets,
+            clamp_events,
+        })?;
+        self.step += 1;
+        Ok(())
+    }
+}
+
+/// The targets actually sent: the requested ones with the clamp events applied.
+fn applied(
+    targets: &[f64; N_HAND_JOINTS],
+    events: &[crate::hardware::safety::ClampEvent],
+) -> [f64; N_HAND_JOINTS] {
+    let mut out = *targets;
+    for e in events {
+        if let Some(k) = crate::robot::joints::hand_index(&e.joint) {
+            out[k] = e.applied;
+        }
+    }
+    out
+}
+
+/// Runs one grasp attempt of `plan` with `policy` on `arm` (see the module docs), logging
+/// every step to `log`. On an error the outcome line records it before it is returned.
+pub fn run_attempt<B: HandArm>(
+    arm: &mut SafeHandArm<B>,
+    robot: &Robot,
+    plan: &GraspPlan,
+    policy: &mut PolicyRunner,
+    calibration: &TactileCalibration,
+    cfg: &PipelineConfig,
+    log: &mut AttemptLog,
+) -> Result<AttemptOutcome, RunError> {
+    cfg.validate()?;
+    calibration.validate()?;
+    let mut at = Attempt {
+        arm,
+        calibration,
+        mapper: TorqueMapper::new(cfg.torque_thresholds)?,
+        log,
+        step: 0,
+        clamped: 0,
+        last_sent: [0.0; N_HAND_JOINTS],
+    };
+    match attempt_body(&mut at, robot, plan, policy, cfg) {
+        Ok(mut out) => {
+            out.time_s = at.arm.now();
+            at.log.outcome(OutcomeRecord {
+                time_s: out.time_s,
+                steps: out.policy_steps as u64,
+                success: out.success,
+                reason: out.reason.clone(),
+            })?;
+            out.clamped_commands = at.clamped;
+            out.log_lines = at.log.lines_written();
+            Ok(out)
+        }
+        Err(e) => {
+            let _ = at.log.outcome(OutcomeRecord {
+                time_s: at.arm.now(),
+                steps: at.step,
+                success: false,
+                reason: format!("error: {e}"),
+            });
+            Err(e)
+        }
+    }
+}
+
+fn attempt_body<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    robot: &Robot,
+    plan: &GraspPlan,
+    policy: &mut PolicyRunner,
+    cfg: &PipelineConfig,
+) -> Result<AttemptOutcome, RunError> {
+    let env = policy.env.clone();
+    // 1. tau_j0 with the empty, still hand.
+    let mut base = Vec::with_capacity(cfg.baseline_readings);
+    for k in 0..cfg.baseline_readings {
+        if k > 0 {
+            at.arm.wait(cfg.baseline_period_s)?;
+        }
+        base.push(at.arm.read()?.tendon_raw);
+    }
+    at.mapper.set_baseline(base)?;
+    // 2. Preshape, pre-grasp, grasp.
+    let mut m = at.read()?;
+    at.last_sent = m.raw.joint_angles;
+    for _ in 0..cfg.preshape_commands {
+        let far = m
+            .raw
+            .joint_angles
+            .iter()
+            .zip(&plan.preshape)
+            .any(|(q, t)| (q - t).abs() > 0.05);
+        if !far {
+            break;
+        }
+        m = at.command(&plan.preshape, Vec::new(), cfg.control_period_s)?;
+    }
+    at.arm.move_arm(&ArmMotion::Joints(plan.pregrasp_q))?;
+    at.arm.move_arm(&ArmMotion::Joints(plan.grasp_q))?;
+    // 3. Stage 1: the closing trajectory T until a fingertip touches.
+    let closed = script::power_grasp();
+    let n = (env.closing_time / env.closing_period).round().max(1.0) as usize;
+    let start = plan.preshape;
+    let mut touched = false;
+    let mut updates = 0;
+    m = at.read()?;
+    for i in 1..=n {
+        let t: [f64; 24] = std::array::from_fn(|j| closing_target(&start, &closed, j, i, n));
+        m = at.command(&t, Vec::new(), env.closing_period)?;
+        updates = i;
+        if m.tactile.contains(&true) {
+            touched = true;
+            break;
+        }
+    }
+    // 4. Stage 2: the policy.
+    let hl = robot.hand_limits();
+    let finger_limits = robot.finger_limits();
+    let wrist_limits = [hl[0], hl[1]];
+    let n_cont = policy.synergy.n_components() + 2;
+    let mut stack = FrameStack::new(&policy.layout);
+    policy.agent.reset();
+    stack.push(policy.layout.frame(
+        &vec![0.0; n_cont],
+        &m.tactile,
+        &m.levels,
+        &m.raw.joint_angles,
+    ));
+    let mut steps = 0;
+    let mut lifted = false;
+    while steps < env.max_steps {
+        let a = policy.agent.act(&stack.stacked());
+        steps += 1;
+        let mut logged: Vec<f64> = a.cont.iter().map(|&x| f64::from(x)).collect();
+        logged.push(if a.lift { 1.0 } else { 0.0 });
+        if a.lift {
+            lifted = true;
+            let hold = at.last_sent;
+            at.log_step(&m, logged, hold, Vec::new())?;
+            break;
+        }
+        let targets = hand_targets(
+            &env.action,
+            &policy.eps_std,
+            &policy.synergy,
+            &finger_limits,
+            &wrist_limits,
+            &m.raw.joint_angles,
+            &a.cont,
+        );
+        m = at.command(&targets, logged, cfg.control_period_s)?;
+        let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();
+        stack.push(
+            policy
+                .layout
+                .frame(&prev, &m.tactile, &m.levels, &m.raw.joint_angles),
+        );
+    }
+    let base_out = AttemptOutcome {
+        success: false,
+        reason: String::new(),
+        judged_by: String::new(),
+        stage1_updates: updates,
+        touched,
+        policy_steps: steps,
+        lifted,
+        clamped_commands: 0,
+        log_lines: 0,
+        time_s: 0.0,
+    };
+    if !lifted {
+        return Ok(AttemptOutcome {
+            reason: format!(
+                "the policy did not decide to lift within {} steps",
+                env.max_steps
+            ),
+            judged_by: "pipeline".into(),
+            ..base_out
+        });
+    }
+    // 5. Lift and judge.
+    at.arm.move_arm(&ArmMotion::Lift {
+        height_m: cfg.lift_height_m,
+        duration_s: cfg.lift_duration_s,
+    })?;
+    let after = at.read()?;
+    let contacts = after.tactile.iter().filter(|&&c| c).count();
+    let (success, judged_by) = match at.arm.lift_outcome() {
+        Some(s) => (s, "simulator"),
+        None => (contacts >= cfg.held_min_contacts, "tactile sensors"),
+    };
+    let reason = if success {
+        format!("held after the lift ({contacts} fingertips in contact)")
+    } else {
+        format!("not held after the lift ({contacts} fingertips in contact)")
+    };
+    Ok(AttemptOutcome {
+        success,
+        reason,
+        judged_by: judged_by.into(),
+        ..base_out
+    })
+}

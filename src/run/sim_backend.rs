@@ -1,0 +1,685 @@
+//! [`SimHandArm`]: the simulator behind the [`HandArm`] interface, with a model of the
+//! real hand's raw signals so that calibration, drift compensation and the safety layer
+//! are exercised end to end.
+//!
+//! # Raw-sensor model
+//! For backend time `t` (s), fingertip `k` and actuator `j` (all noise Gaussian, drawn from
+//! one `ChaCha8Rng` seeded by [`RawModelConfig::seed`], a fixed number of draws per
+//! reading so that runs with the same seed see the same noise):
+//! - tactile: `raw_k = tactile_offset[k] + tactile_gain[k] * F_k + N(0, tactile_noise)`,
+//!   where `F_k` is the normal force (N) between the object and the distal phalanx
+//!   ([`HandSim::tip_forces`]). With the hand still, the readings scatter around the
+//!   offset (the calibration's lower range); pressed, they rise by the gain times the force
+//!   (the upper range).
+//! - tendons: `raw_j = tendon_scale * e_j + tendon_offset + tendon_drift_rate * t +
+//!   w_j(t) + N(0, tendon_noise)`, where `e_j` is the actuator effort (N m, the PD law the
+//!   motors apply, [`HandSim::sensors`]) and `w_j` a random walk with standard deviation
+//!   `tendon_drift_walk * sqrt(dt)` per reading interval `dt`. The default scale of 1000
+//!   units per N m puts the real robot's thresholds (-200, -100, 0, 100, 200) at
+//!   (-0.2, -0.1, 0, 0.1, 0.2) N m, the same torques as the simulator's own thresholds.
+//! - joint angles: the simulated angles plus `N(0, joint_noise)`.
+//!
+//! # Pressing a fingertip
+//! Calibration needs the maximum reading while each fingertip is pressed. Pushing each
+//! fingertip against a probe in the physics would need a probe body the simulator does not
+//! have, so a press is modelled as a KNOWN force added to that fingertip's contact force in
+//! the raw model: [`SimHandArm::read_pressed`] returns one reading with `F_k + force`.
+//!
+//! # Clock, arm and lift
+//! - The clock is simulated time ([`RawModelConfig::clock_start_s`] plus the physics time
+//!   since construction): [`HandArm::wait`] steps the physics, nothing sleeps.
+//! - [`SimHandArm::inject_sensor_dropout`] makes every reading from a given time on repeat
+//!   the last fresh one, stamp included (the sensor data stops), for the watchdog.
+//! - The UR10e is not simulated (the simulator carries the hand on a vertical lift).
+//!   [`ArmMotion::Joints`] places the hand where the arm's forward kinematics puts the
+//!   flange (the hand's forearm frame is the flange frame): the world is reset with the
+//!   hand there in its current posture and the object back at rest. The simulator only
+//!   places hands palm down, so a pose whose palm normal is more than 1 mrad from the
+//!   vertical is refused. Where the hand would overlap the object it is raised in 5 mm
+//!   steps (at most 10 cm), as a guarded approach that stops at first contact would.
+//! - [`ArmMotion::Lift`] runs the simulator's lift ([`HandSim::lift_and_judge`]: its
+//!   configured height, ramp and hold); a lift of another height is refused. The judgement
+//!   (object held) is reported by [`HandArm::lift_outcome`].
+
+use super::pipeline::ArmBase;
+use crate::hardware::partial_view::{partial_view, SurfaceSamples};
+use crate::hardware::pointcloud::CloudError;
+use crate::hardware::{
+    check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE, N_TENDONS,
+};
+use crate::robot::grasp_map::hand_grasp_frame;
+use crate::robot::{ur10e, Posture, Robot};
+use crate::sim::{HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig};
+use nalgebra::{Isometry3, Point3, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rapier3d::math::Pose;
+use rapier3d::parry::query::Ray;
+
+/// Largest tilt of the palm normal from the vertical that the simulator accepts (rad).
+pub const MAX_PALM_TILT_RAD: f64 = 1e-3;
+/// Step of the guarded placement (m).
+pub const GUARD_STEP_M: f64 = 0.005;
+/// Largest raise of the guarded placement (m).
+pub const GUARD_MAX_M: f64 = 0.10;
+
+/// Parameters of the raw-sensor model (see the module docs for the equations).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RawModelConfig {
+    /// Tactile reading with no force, per fingertip FF, MF, RF, LF, TH (sensor units).
+    pub tactile_offset: [f64; N_TACTILE],
+    /// Tactile units per newton of contact force, per fingertip.
+    pub tactile_gain: [f64; N_TACTILE],
+    /// Standard deviation of the tactile noise (units).
+    pub tactile_noise: f64,
+    /// Tendon units per N m of actuator effort.
+    pub tendon_scale: f64,
+    /// Constant tendon offset (units).
+    pub tendon_offset: f64,
+    /// Linear tendon drift (units per second of backend time).
+    pub tendon_drift_rate: f64,
+    /// Random-walk tendon drift (units per square-root second).
+    pub tendon_drift_walk: f64,
+    /// Standard deviation of the tendon noise (units).
+    pub tendon_noise: f64,
+    /// Standard deviation of the joint-angle noise (rad).
+    pub joint_noise: f64,
+    /// Backend time at construction (s): where the linear drift starts.
+    pub clock_start_s: f64,
+    /// Seed of the noise.
+    pub seed: u64,
+}
+
+impl Default for RawModelConfig {
+    fn default() -> Self {
+        RawModelConfig {
+            tactile_offset: [312.0, 298.0, 305.0, 287.0, 321.0],
+            tactile_gain: [100.0, 95.0, 105.0, 98.0, 102.0],
+            tactile_noise: 0.3,
+            tendon_scale: 1000.0,
+            tendon_offset: 1500.0,
+            tendon_drift_rate: 2.0,
+            tendon_drift_walk: 1.0,
+            tendon_noise: 2.0,
+            joint_noise: 0.001,
+            clock_start_s: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+impl RawModelConfig {
+    /// Checks that every number is finite, gains and scales positive, noises
+    /// non-negative; the error names the field.
+    pub fn validate(&self) -> Result<(), HwError> {
+        let bad = |field: String, detail: String| Err(HwError::InvalidCommand { field, detail });
+        for k in 0..N_TACTILE {
+            if !self.tactile_offset[k].is_finite() {
+                return bad(format!("tactile_offset[{k}]"), "must be finite".into());
+            }
+            if !(self.tactile_gain[k].is_finite() && self.tactile_gain[k] > 0.0) {
+                return bad(format!("tactile_gain[{k}]"), "must be positive".into());
+            }
+        }
+        for (name, v) in [
+            ("tendon_offset", self.tendon_offset),
+            ("tendon_drift_rate", self.tendon_drift_rate),
+            ("clock_start_s", self.clock_start_s),
+        ] {
+            if !v.is_finite() {
+                return bad(name.into(), format!("{v} is not finite"));
+            }
+        }
+        if !(self.tendon_scale.is_finite() && self.tendon_scale > 0.0) {
+            return bad("tendon_scale".into(), "must be positive".into());
+        }
+        for (name, v) in [
+            ("tactile_noise", self.tactile_noise),
+            ("tendon_drift_walk", self.tendon_drift_walk),
+            ("tendon_noise", self.tendon_noise),
+            ("joint_noise", self.joint_noise),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name.into(), format!("{v} must be finite and >= 0"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Where the object lies and where the arm stands in the simulated world.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimBackendConfig {
+    /// The raw-sensor model.
+    pub raw: RawModelConfig,
+    /// Object centre x, y on the table (m).
+    pub object_xy: [f64; 2],
+    /// Object yaw (rad).
+    pub object_yaw: f64,
+    /// The UR10e base in the world.
+    pub arm_base: ArmBase,
+    /// Height of the hand's grasp point above the object's top at construction (m).
+    pub home_clearance: f64,
+}
+
+impl Default for SimBackendConfig {
+    fn default() -> Self {
+        SimBackendConfig {
+            raw: RawModelConfig::default(),
+            object_xy: [0.0, 0.0],
+            object_yaw: 0.0,
+            arm_base: ArmBase::default(),
+            home_clearance: 0.15,
+        }
+    }
+}
+
+/// Simulated depth cameras looking at the object: each casts a square grid of rays
+/// toward the object's centre against its collision shape (so self-occlusion is exact),
+/// and the hits get Gaussian noise ([`partial_view`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraConfig {
+    /// Camera positions relative to the object's centre (m). The default is two views from
+    /// opposite sides, 45 degrees above the table: a single view of a box shows no pair of
+    /// opposite faces, which the antipodal sampler needs.
+    pub positions: Vec<[f64; 3]>,
+    /// Rays per side of each camera's square grid.
+    pub resolution: usize,
+    /// Depth noise, standard deviation (m).
+    pub noise_sigma: f64,
+}
+
+impl Default for CameraConfig {
+    fn default() -> Self {
+        CameraConfig {
+            positions: vec![[0.35, 0.0, 0.35], [-0.35, 0.0, 0.35]],
+            resolution: 48,
+            noise_sigma: crate::hardware::partial_view::DEFAULT_NOISE_SIGMA,
+        }
+    }
+}
+
+/// The simulated hand-arm system (see the module docs).
+pub struct SimHandArm {
+    sim: HandSim,
+    cfg: SimBackendConfig,
+    rng: ChaCha8Rng,
+    clock_base: f64,
+    walk: [f64; N_TENDONS],
+    walk_time: f64,
+    dropout_at: Option<f64>,
+    last_fresh: Option<RawSensors>,
+    extra_force: [f64; N_TACTILE],
+    stops: Vec<f64>,
+    lift: Option<LiftOutcome>,
+    guard_raise: f64,
+}
+
+fn sim_err(e: crate::sim::SimError) -> HwError {
+    HwError::InvalidCommand {
+        field: "simulator".into(),
+        detail: e.to_string(),
+    }
+}
+
+impl SimHandArm {
+    /// A simulated hand (`robot`'s Shadow hand) with `object` at rest on the table and the
+    /// hand open, its grasp point `home_clearance` above the object's top.
+    pub fn new(
+        robot: &Robot,
+        object: ObjectSpec,
+        sim_cfg: SimConfig,
+        cfg: SimBackendConfig,
+    ) -> Result<SimHandArm, HwError> {
+        cfg.raw.validate()?;
+        let finite = cfg.object_xy.iter().all(|v| v.is_finite())
+            && cfg.object_yaw.is_finite()
+            && cfg.home_clearance.is_finite()
+            && cfg.home_clearance >= 0.0;
+        if !finite {
+            return Err(HwError::InvalidCommand {
+                field: "object_xy/object_yaw/home_clearance".into(),
+                detail: "must be finite (clearance >= 0)".into(),
+            });
+        }
+        let top = 2.0 * object.rest_height();
+        let sim = HandSim::new(robot, object, sim_cfg).map_err(sim_err)?;
+        let rng = ChaCha8Rng::seed_from_u64(cfg.raw.seed);
+        let clock = cfg.raw.clock_start_s;
+        let mut arm = SimHandArm {
+            sim,
+            rng,
+            clock_base: clock,
+            walk: [0.0; N_TENDONS],
+            walk_time: clock,
+            dropout_at: None,
+            last_fresh: None,
+            extra_force: [0.0; N_TACTILE],
+            stops: Vec::new(),
+            lift: None,
+            guard_raise: 0.0,
+            cfg,
+        };
+        let [x, y] = arm.cfg.object_xy;
+        let scene = Scene {
+            start: Posture::Open.angles(),
+            object_xy: [x, y],
+            object_yaw: arm.cfg.object_yaw,
+            grasp_point: [x, y, top + arm.cfg.home_clearance],
+            hand_yaw: 0.0,
+        };
+        arm.place(scene)?;
+        Ok(arm)
+    }
+
+    /// The simulator (read-only).
+    pub fn sim(&self) -> &HandSim {
+        &self.sim
+    }
+
+    /// The backend configuration.
+    pub fn config(&self) -> &SimBackendConfig {
+        &self.cfg
+    }
+
+    /// From backend time `at_s` on, every reading repeats the last fresh one (stamp
+    /// included): the sensor data stops.
+    pub fn inject_sensor_dropout(&mut self, at_s: f64) {
+        self.dropout_at = Some(at_s);
+    }
+
+    /// Backend times at which [`HandArm::stop`] was called.
+    pub fn stop_times(&self) -> &[f64] {
+        &self.stops
+    }
+
+    /// The simulator's judgement of the last lift.
+    pub fn last_lift(&self) -> Option<&LiftOutcome> {
+        self.lift.as_ref()
+    }
+
+    /// How far the last [`ArmMotion::Joints`] placement was raised to clear the object (m).
+    pub fn guard_raise(&self) -> f64 {
+        self.guard_raise
+    }
+
+    /// The point cloud the depth cameras of `cam` see of the object in its current pose
+    /// (world frame, m), with noise drawn from `seed` (see [`CameraConfig`]).
+    pub fn camera_cloud(
+        &self,
+        cam: &CameraConfig,
+        seed: u64,
+    ) -> Result<Vec<Point3<f64>>, CloudError> {
+        if cam.positions.is_empty() || cam.resolution < 2 {
+            return Err(CloudError::BadParameter {
+                name: "cameras",
+                detail: "need at least one camera and a resolution of at least 2".into(),
+            });
+        }
+        let [px, py, pz, qx, qy, qz, qw] = self.sim.object_pose_raw();
+        let body = Pose::from_parts(
+            rapier3d::math::Vector::new(px, py, pz),
+            rapier3d::math::Rotation::from_xyzw(qx, qy, qz, qw),
+        );
+        let builder = self.sim.object().shape.collider();
+        let shape_pose = body * builder.position;
+        let shape = builder.shape;
+        let centre = Point3::new(f64::from(px), f64::from(py), f64::from(pz));
+        let h = self.sim.object().shape.half_extents();
+        let radius = 1.1 * Vector3::from(h).norm();
+        let mut cloud = Vec::new();
+        for (k, rel) in cam.positions.iter().enumerate() {
+            let rel = Vector3::from(*rel);
+            let dist = rel.norm();
+            if !(dist.is_finite() && dist > radius) {
+                return Err(CloudError::BadParameter {
+                    name: "cameras.positions",
+                    detail: format!("camera {k} is not outside the object's bounding sphere"),
+                });
+            }
+            let origin = centre + rel;
+            let f = -rel / dist;
+            let r = f
+                .cross(&Vector3::z())
+                .try_normalize(1e-9)
+                .unwrap_or_else(Vector3::x);
+            let u = r.cross(&f);
+            let spread = radius / (dist * dist - radius * radius).sqrt();
+            let n = cam.resolution;
+            let mut surf = SurfaceSamples::default();
+            for i in 0..n {
+                for j in 0..n {
+                    let s = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+                    let t = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
+                    let d = (f + spread * (s * r + t * u)).normalize();
+                    let ray = Ray::new(
+                        rapier3d::math::Vector::new(
+                            origin.x as f32,
+                            origin.y as f32,
+                            origin.z as f32,
+                        ),
+                        rapier3d::math::Vector::new(d.x as f32, d.y as f32, d.z as f32),
+                    );
+                    if let Some(hit) =
+                        shape.cast_ray_and_get_normal(&shape_pose, &ray, (2.0 * dist) as f32, true)
+                    {
+                        let toi = f64::from(hit.time_of_impact);
+                        let nrm = hit.normal;
+                        surf.points.push(origin + d * toi);
+                        surf.normals.push(Vector3::new(
+                            f64::from(nrm.x),
+                            f64::from(nrm.y),
+                            f64::from(nrm.z),
+                        ));
+                    }
+                }
+            }
+            cloud.extend(partial_view(
+                &surf,
+                origin,
+                cam.noise_sigma,
+                seed.wrapping_add(k as u64),
+            )?);
+        }
+        Ok(cloud)
+    }
+
+    /// One reading while fingertip `finger` (0..5: FF, MF, RF, LF, TH) is pressed with
+    /// `force_n` newtons (a known force added to its contact force in the raw model).
+    pub fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
+        if finger >= N_TACTILE {
+            return Err(HwError::InvalidCommand {
+                field: "finger".into(),
+                detail: format!("{finger} is not a fingertip index 0..5"),
+            });
+        }
+        if !(force_n.is_finite() && force_n >= 0.0) {
+            return Err(HwError::InvalidCommand {
+                field: "press force".into(),
+                detail: format!("{force_n} N must be finite and >= 0"),
+            });
+        }
+        self.extra_force[finger] = force_n;
+        let r = self.read();
+        self.extra_force = [0.0; N_TACTILE];
+        r
+    }
+
+    /// Resets the world with `scene`, raising the hand in [`GUARD_STEP_M`] steps while it
+    /// overlaps the object.
+    fn place(&mut self, mut scene: Scene) -> Result<(), HwError> {
+        self.clock_base += self.sim.time();
+        let mut raised = 0.0;
+        loop {
+            self.sim.reset(&scene).map_err(sim_err)?;
+            if !self.sim.hand_overlaps_object() {
+                break;
+            }
+            if raised >= GUARD_MAX_M - 1e-12 {
+                return Err(HwError::InvalidCommand {
+                    field: "arm joints".into(),
+                    detail: format!(
+                        "the hand overlaps the object even {:.0} mm above this pose",
+                        GUARD_MAX_M * 1000.0
+                    ),
+                });
+            }
+            scene.grasp_point[2] += GUARD_STEP_M;
+            raised += GUARD_STEP_M;
+        }
+        self.guard_raise = raised;
+        self.lift = None;
+        Ok(())
+    }
+
+    /// The scene that puts the hand where the arm at `q` puts the flange.
+    fn scene_for_arm(&self, q: &[f64; 6]) -> Result<Scene, HwError> {
+        let robot = self.sim.robot();
+        let hand_q = self.sim.targets();
+        let flange = self.cfg.arm_base.pose() * ur10e::fk(q);
+        let palm = flange * robot.hand_fk_palm(&hand_q)[robot.hand.forearm].inverse();
+        let gf: Isometry3<f64> = palm
+            * hand_grasp_frame(robot, &hand_q).map_err(|e| HwError::InvalidCommand {
+                field: "hand posture".into(),
+                detail: e.to_string(),
+            })?;
+        let approach = gf.rotation * Vector3::x();
+        let tilt = approach.angle(&-Vector3::z());
+        if tilt.is_nan() || tilt > MAX_PALM_TILT_RAD {
+            return Err(HwError::InvalidCommand {
+                field: "arm joints".into(),
+                detail: format!(
+                    "the simulator places the hand palm down only; this pose tilts the palm normal {tilt:.3} rad from the vertical"
+                ),
+            });
+        }
+        let y = gf.rotation * Vector3::y();
+        let p = gf.translation.vector;
+        Ok(Scene {
+            start: hand_q,
+            object_xy: self.cfg.object_xy,
+            object_yaw: self.cfg.object_yaw,
+            grasp_point: [p.x, p.y, p.z],
+            hand_yaw: y.y.atan2(y.x),
+        })
+    }
+
+    fn fresh_reading(&mut self) -> RawSensors {
+        let raw = &self.cfg.raw;
+        let t = self.clock_base + self.sim.time();
+        let s = self.sim.sensors();
+        let tip = self.sim.tip_forces();
+        let rng = &mut self.rng;
+        let mut gauss = |sigma: f64| {
+            let z: f64 = StandardNormal.sample(rng);
+            sigma * z
+        };
+        let joint_angles: [f64; N_HAND_JOINTS] =
+            std::array::from_fn(|k| s.q[k] + gauss(raw.joint_noise));
+        let tactile_raw: [f64; N_TACTILE] = std::array::from_fn(|k| {
+            raw.tactile_offset[k]
+                + raw.tactile_gain[k] * (tip[k] + self.extra_force[k])
+                + gauss(raw.tactile_noise)
+        });
+        let dt = (t - self.walk_time).max(0.0);
+        let walk_sigma = raw.tendon_drift_walk * dt.sqrt();
+        for w in self.walk.iter_mut() {
+            *w += gauss(walk_sigma);
+        }
+        self.walk_time = t;
+        let tendon_raw: [f64; N_TENDONS] = std::array::from_fn(|j| {
+            raw.tendon_scale * s.effort[j]
+                + raw.tendon_offset
+                + raw.tendon_drift_rate * t
+                + self.walk[j]
+                + gauss(raw.tendon_noise)
+        });
+        RawSensors {
+            stamp: t,
+            joint_angles,
+            tactile_raw,
+            tendon_raw,
+        }
+    }
+}
+
+impl HandArm for SimHandArm {
+    fn read(&mut self) -> Result<RawSensors, HwError> {
+        if let Some(at) = self.dropout_at {
+            let now = self.now();
+            if now >= at {
+                return self.last_fresh.ok_or(HwError::Timeout {
+                    what: "sensor data (none before the dropout)".into(),
+                    waited_s: now - at,
+                });
+            }
+        }
+        let r = self.fresh_reading();
+        self.last_fresh = Some(r);
+        Ok(r)
+    }
+
+    fn command_hand(&mut self, targets: &[f64; N_HAND_JOINTS]) -> Result<(), HwError> {
+        self.sim.set_targets(targets).map_err(sim_err)
+    }
+
+    fn move_arm(&mut self, motion: &ArmMotion) -> Result<(), HwError> {
+        motion.validate()?;
+        match *motion {
+            ArmMotion::Joints(q) => {
+                let scene = self.scene_for_arm(&q)?;
+                self.place(scene)
+            }
+            ArmMotion::Lift { height_m, .. } => {
+                let h = self.sim.config().lift.height;
+                if (height_m - h).abs() > 1e-6 {
+                    return Err(HwError::InvalidCommand {
+                        field: "lift height_m".into(),
+                        detail: format!(
+                            "the simulator lifts by its configured lift.height {h} m, not {height_m} m"
+                        ),
+                    });
+                }
+                let out = self.sim.lift_and_judge();
+                let failure = out.failure.clone();
+                self.lift = Some(out);
+                match failure {
+                    Some(f) => Err(HwError::Disconnected(format!(
+                        "the simulated physics failed during the lift: {f:?}"
+                    ))),
+                    None => Ok(()),
+                }
+            }
+        }
+    }
+
+    fn stop(&mut self) -> Result<(), HwError> {
+        self.stops.push(self.now());
+        let (q, _) = self.sim.joint_state();
+        self.sim.set_targets(&q).map_err(sim_err)
+    }
+
+    fn now(&self) -> f64 {
+        self.clock_base + self.sim.time()
+    }
+
+    fn wait(&mut self, seconds: f64) -> Result<(), HwError> {
+        check_duration(seconds)?;
+        let dt = self.sim.config().dt;
+        let end = self.sim.time() + seconds;
+        while self.sim.time() + 0.5 * dt <= end {
+            if !self.sim.step_physics() {
+                return Err(HwError::Disconnected(format!(
+                    "the simulated physics failed: {:?}",
+                    self.sim.failure()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn lift_outcome(&self) -> Option<bool> {
+        self.lift.as_ref().map(|l| l.success)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
+    use crate::robot::Side;
+
+    fn arm(cfg: SimBackendConfig) -> SimHandArm {
+        let robot = Robot::builtin(Side::Left);
+        SimHandArm::new(&robot, ObjectSpec::default_box(), SimConfig::default(), cfg).unwrap()
+    }
+
+    #[test]
+    fn raw_model_still_readings_sit_at_the_offsets() {
+        let mut a = arm(SimBackendConfig::default());
+        let r = a.read().unwrap();
+        let raw = RawModelConfig::default();
+        for k in 0..5 {
+            // No contact: offset + noise (sigma 0.3, 6 sigma bound).
+            assert!(
+                (r.tactile_raw[k] - raw.tactile_offset[k]).abs() < 1.8,
+                "{k}"
+            );
+        }
+        // A press of 10 N adds gain * 10.
+        let p = a.read_pressed(2, 10.0).unwrap();
+        assert!((p.tactile_raw[2] - (305.0 + 1050.0)).abs() < 1.8);
+        assert!((p.tactile_raw[0] - 312.0).abs() < 1.8);
+        assert!(a.read_pressed(5, 1.0).is_err());
+        assert!(a.read_pressed(0, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn wait_steps_the_clock_and_dropout_freezes_stamps() {
+        let mut a = arm(SimBackendConfig::default());
+        assert_eq!(a.now(), 0.0);
+        a.wait(0.1).unwrap();
+        assert!((a.now() - 0.1).abs() < 1e-9, "{}", a.now());
+        assert!((a.read().unwrap().stamp - 0.1).abs() < 1e-9);
+        a.inject_sensor_dropout(0.15);
+        a.wait(0.1).unwrap();
+        let r = a.read().unwrap();
+        // The last fresh reading was at 0.1 s.
+        assert!((r.stamp - 0.1).abs() < 1e-9);
+        assert!(a.wait(-1.0).is_err());
+    }
+
+    #[test]
+    fn linear_drift_shifts_every_tendon_by_rate_times_time() {
+        let mut cfg = SimBackendConfig::default();
+        cfg.raw.tendon_drift_walk = 0.0;
+        let mut a = arm(cfg.clone());
+        cfg.raw.clock_start_s = 100.0;
+        let mut b = arm(cfg);
+        let (ra, rb) = (a.read().unwrap(), b.read().unwrap());
+        for j in 0..20 {
+            // Same seed, same noise: the difference is the drift 2 units/s * 100 s.
+            assert!((rb.tendon_raw[j] - ra.tendon_raw[j] - 200.0).abs() < 1e-6);
+        }
+        assert!((rb.stamp - 100.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn arm_joints_place_the_hand_and_tilted_poses_are_refused() {
+        let mut a = arm(SimBackendConfig::default());
+        let robot = Robot::builtin(Side::Left);
+        let q_hand = a.sim().targets();
+        let g = TwoFingerGrasp::top_down(Point3::new(0.0, 0.0, 0.2), 0.4);
+        let root = root_pose_for(&robot, &q_hand, &g).unwrap();
+        let base = a.config().arm_base.pose();
+        let q = ur10e::ik(&(base.inverse() * root), &ur10e::HOME).unwrap();
+        let s = a.scene_for_arm(&q).unwrap();
+        assert!((s.grasp_point[2] - 0.2).abs() < 1e-6, "{:?}", s.grasp_point);
+        assert!(s.grasp_point[0].abs() < 1e-6 && s.grasp_point[1].abs() < 1e-6);
+        assert!((s.hand_yaw - 0.4).abs() < 1e-6, "{}", s.hand_yaw);
+        a.move_arm(&ArmMotion::Joints(q)).unwrap();
+        assert_eq!(a.guard_raise(), 0.0);
+        let tilted = TwoFingerGrasp {
+            center: Point3::new(0.0, 0.0, 0.2),
+            approach: Vector3::new(0.3, 0.0, -1.0),
+            closing: Vector3::y(),
+        };
+        let root = root_pose_for(&robot, &q_hand, &tilted).unwrap();
+        let q = ur10e::ik(&(base.inverse() * root), &ur10e::HOME).unwrap();
+        let e = a.move_arm(&ArmMotion::Joints(q)).unwrap_err().to_string();
+        assert!(e.contains("palm down"), "{e}");
+        // A lift of another height than the simulator's is refused.
+        let e = a
+            .move_arm(&ArmMotion::Lift {
+                height_m: 0.3,
+                duration_s: 2.0,
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("lift.height"), "{e}");
+    }
+}
