@@ -199,6 +199,16 @@ impl HandSim {
             .collect()
     }
 
+    /// For every hand collider (order of [`HandSim::hand_geometry`]), the finger whose
+    /// tactile sensor it belongs to (0..5 = FF, MF, RF, LF, TH: the distal phalanx with its
+    /// tip), or `None`.
+    pub fn hand_tactile_fingers(&self) -> Vec<Option<u8>> {
+        self.hand_colliders
+            .iter()
+            .map(|h| (0u8..5).find(|f| self.distal_colliders[usize::from(*f)].contains(h)))
+            .collect()
+    }
+
     /// The world pose of every hand collider now, in the order of
     /// [`HandSim::hand_geometry`]; valid right after a reset too.
     pub fn link_poses(&self) -> Vec<[f32; 7]> {
@@ -339,6 +349,11 @@ mod tests {
         let s = sim();
         let g = s.hand_geometry();
         assert!(g.len() > 20, "{}", g.len());
+        let fingers = s.hand_tactile_fingers();
+        assert_eq!(fingers.len(), g.len());
+        for f in 0..5u8 {
+            assert!(fingers.contains(&Some(f)), "finger {f}");
+        }
         // The built-in hand: cylinder phalanges with sphere tips, box palm.
         for kind in ["cylinder", "sphere", "box"] {
             assert!(
