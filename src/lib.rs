@@ -12,12 +12,16 @@
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
 //!   textbook control task.
-//! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout.
+//! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout; episode
+//!   recordings with a 3D replay page.
+//! - [`experiment`]: grids of training runs (the paper's ablations), summaries and Fig.-5
+//!   style plots.
 //! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 
 pub mod env;
 pub mod eval;
+pub mod experiment;
 pub mod hardware;
 pub mod objects;
 pub mod policy;

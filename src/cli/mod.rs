@@ -5,6 +5,7 @@ use clap::{Args, Parser, Subcommand};
 
 mod bench;
 mod eval;
+mod experiment;
 mod objects;
 mod pca;
 mod robot;
@@ -59,6 +60,8 @@ pub enum Command {
     Eval(eval::EvalArgs),
     /// Train a policy with PPO from a config file into a run folder.
     Train(train::TrainArgs),
+    /// Run the paper's ablations: a grid of (config, seed) training runs, summary, plots.
+    Experiment(experiment::ExperimentArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -93,5 +96,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Eval(a) => eval::run(a, &global),
         Command::Objects(a) => objects::run(a, &global),
         Command::Train(a) => train::run(a, &global),
+        Command::Experiment(a) => experiment::run(a, &global),
     }
 }
