@@ -5,9 +5,11 @@
 //! - [`evaluate`]: one agent on every object of a set, trials seeded per (object, trial);
 //! - [`checkpoint_setup`]: the environment a checkpoint was trained in, read from the
 //!   `config.toml` saved beside it, so evaluations observe what the policy expects;
-//! - [`record`]: episode recordings (JSON and a self-contained 3D replay page).
+//! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
+//! - [`regression`]: the CI regression check against committed reference figures.
 
 pub mod record;
+pub mod regression;
 
 use crate::env::api::Action;
 use crate::env::grasp::{run_episode, Agent, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError};

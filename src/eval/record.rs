@@ -477,10 +477,16 @@ mod tests {
         assert_eq!(rec.summary, plain);
         assert!(frames_cover_episode(&rec));
         assert!(!e.sim().is_recording());
-        // The closing then the lift (2 s at 240 Hz every 4 steps: 120 frames).
+        // The closing then the lift: (ramp + hold) / dt physics steps, a frame every 4.
         assert_eq!(rec.frames[0].stage, "closing");
-        let lift = rec.frames.iter().filter(|f| f.stage == "lift").count();
-        assert_eq!(lift, 120, "{lift}");
+        let cfg = e.sim().config();
+        let lift_steps = ((cfg.lift.ramp_time / cfg.dt).round().max(1.0)
+            + (cfg.lift.hold_time / cfg.dt).round()) as i64;
+        let lift = rec.frames.iter().filter(|f| f.stage == "lift").count() as i64;
+        assert!(
+            (lift - lift_steps / 4).abs() <= 1,
+            "{lift} vs {lift_steps} / 4"
+        );
         assert!(rec.frames.iter().all(|f| f.stage != "control"));
         assert!(rec.control.is_empty());
     }
