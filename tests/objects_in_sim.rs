@@ -82,6 +82,7 @@ const KNOWN_UNSTABLE: &[&str] = &[
     "egad_c2_d2",
     "egad_c2_d3",
     "egad_c3_d0",
+    "egad_c3_d4",
     "egad_c5_d0",
     "egad_c5_d1",
     "egad_c5_d2",

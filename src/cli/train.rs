@@ -18,7 +18,7 @@ use super::Global;
 /// at most one update is lost.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp train --config configs/cartpole.toml\n  grasp train --config configs/quick.toml --out runs/quick1 --seed 3\n  grasp train --config configs/gru_m3_pca5.toml --resume\n  grasp train --config configs/base.toml --total-timesteps 20000 --num-envs 4 --json\n\nThe global --seed overrides the config's seed."
+    after_help = "Examples:\n  grasp train --config configs/cartpole.toml\n  grasp train --config configs/quick.toml --out runs/quick1 --seed 3\n  grasp train --config configs/gru_m3_pca5.toml --time-budget-minutes 60\n  grasp train --config configs/gru_m3_pca5.toml --resume\n  grasp train --config configs/base.toml --total-timesteps 20000 --num-envs 4 --json\n\nThe global --seed overrides the config's seed."
 )]
 pub struct TrainArgs {
     /// Training config (TOML; may name a `base` config to inherit from).
@@ -36,6 +36,10 @@ pub struct TrainArgs {
     /// Override the config's number of parallel environments.
     #[arg(long)]
     pub num_envs: Option<usize>,
+    /// Override the config's wall-clock budget: stop cleanly, with a checkpoint, after
+    /// this many minutes.
+    #[arg(long)]
+    pub time_budget_minutes: Option<f64>,
 }
 
 pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
@@ -49,6 +53,9 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
     }
     if let Some(n) = a.num_envs {
         cfg.num_envs = n;
+    }
+    if let Some(m) = a.time_budget_minutes {
+        cfg.time_budget_minutes = Some(m);
     }
     cfg.validate(&a.config)
         .context("invalid value given on the command line")?;

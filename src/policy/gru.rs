@@ -71,7 +71,7 @@ impl GruPolicy {
         let gru = candle_nn::rnn::gru(e, h, GRUConfig::default(), vb)?;
         let actor_mean = p.linear("actor.mean", h, c, GAIN_ACTOR, &mut rng)?;
         let actor_lift = if spec.lift {
-            Some(p.linear("actor.lift", h, 1, GAIN_ACTOR, &mut rng)?)
+            Some(p.linear_biased("actor.lift", h, 1, GAIN_ACTOR, cfg.init_lift_bias, &mut rng)?)
         } else {
             None
         };

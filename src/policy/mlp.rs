@@ -44,7 +44,7 @@ impl MlpPolicy {
         let actor_fc2 = p.linear("actor.fc2", h, h, GAIN_HIDDEN, &mut rng)?;
         let actor_mean = p.linear("actor.mean", h, c, GAIN_ACTOR, &mut rng)?;
         let actor_lift = if spec.lift {
-            Some(p.linear("actor.lift", h, 1, GAIN_ACTOR, &mut rng)?)
+            Some(p.linear_biased("actor.lift", h, 1, GAIN_ACTOR, cfg.init_lift_bias, &mut rng)?)
         } else {
             None
         };

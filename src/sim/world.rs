@@ -11,7 +11,8 @@
 //! - Every hand link joined by a movable URDF joint is a multibody link with a revolute
 //!   joint (frames from the URDF `origin`, axis from `axis`, limits from lower/upper).
 //!   Links joined by fixed joints (the fingertip frames) are merged into their parent body.
-//!   Masses and inertias come from the URDF `inertial`; colliders have density 0.
+//!   Masses and inertias come from the URDF `inertial`; colliders carry zero mass
+//!   (explicit zero mass properties).
 //! - Motors: `MotorModel::ForceBased` position motors on every hand joint, gains per group
 //!   from [`SimConfig`], max force = the URDF effort limit. Target angles are clamped to the
 //!   joint limits.
@@ -440,7 +441,7 @@ impl HandSim {
                     let h = sets.colliders.insert_with_parent(
                         ColliderBuilder::new(shape)
                             .position(pose_f32(&(pose * extra)))
-                            .density(0.0)
+                            .mass_properties(MassProperties::default())
                             .friction(cfg.friction.hand as f32)
                             .friction_combine_rule(min)
                             .collision_groups(groups),
@@ -567,6 +568,7 @@ impl HandSim {
             ..Default::default()
         };
         params.num_solver_iterations = cfg.substeps;
+        params.max_ccd_substeps = cfg.ccd_substeps;
         let mut sim = HandSim {
             cfg,
             template: sets.clone(),
@@ -627,7 +629,10 @@ impl HandSim {
             object
                 .shape
                 .collider()
-                .density(0.0)
+                // Zero mass given explicitly, not as density 0: with a density rapier
+                // recomputes the compound's mass properties (tetrahedra of every convex
+                // part) whenever the body's mass is updated, i.e. after every reset.
+                .mass_properties(MassProperties::default())
                 .friction(object.friction as f32)
                 .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(InteractionGroups::new(
