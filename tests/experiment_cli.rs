@@ -34,7 +34,7 @@ fn tiny_grid_trains_reports_skips_and_resumes() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("tiny");
     let out = out_dir.to_str().unwrap();
-    let grid = "configs/tiny_grid.toml";
+    let grid = "configs/grids/tiny_grid.toml";
     let v = ok(&grasp(&[
         "--json",
         "experiment",

@@ -161,7 +161,7 @@ fn control_record(
 
 /// Labels frames: `lift` while the arm lifts, `closing` up to `closing_steps`, else
 /// `control`.
-fn label(frames: Vec<SimFrame>, closing_steps: u64) -> Vec<RecordedFrame> {
+fn stage_frames(frames: Vec<SimFrame>, closing_steps: u64) -> Vec<RecordedFrame> {
     frames
         .into_iter()
         .map(|frame| RecordedFrame {
@@ -208,18 +208,18 @@ fn assemble(
         hand_geometry: sim.hand_geometry(),
         hand_tactile_fingers: sim.hand_tactile_fingers(),
         object_geometry: sim.object_geometry(),
-        frames: label(frames, closing_steps),
+        frames: stage_frames(frames, closing_steps),
         control,
         summary,
     }
 }
 
 /// Runs one episode of `agent` on the scene of `seed` (exactly as
-/// [`crate::env::grasp::run_episode`]) and records it.
+/// [`crate::env::grasp::run_episode`]) and records it under the agent name `label`.
 pub fn record_agent_episode(
     env: &mut GraspEnv,
     agent: &mut dyn Agent,
-    label_: &str,
+    label: &str,
     seed: u64,
     every: u64,
 ) -> EpisodeRecording {
@@ -243,7 +243,7 @@ pub fn record_agent_episode(
         .unwrap_or_else(|| unreachable!("a finished episode has a summary"));
     assemble(
         env,
-        label_,
+        label,
         seed,
         every,
         Some(closing_steps),
@@ -258,7 +258,7 @@ pub fn record_agent_episode(
 pub fn record_baseline_episode(
     env: &mut GraspEnv,
     stop_on_touch: bool,
-    label_: &str,
+    label: &str,
     seed: u64,
     every: u64,
 ) -> Result<EpisodeRecording, SimError> {
@@ -270,15 +270,7 @@ pub fn record_baseline_episode(
             return Err(e);
         }
     };
-    Ok(assemble(
-        env,
-        label_,
-        seed,
-        every,
-        None,
-        summary,
-        Vec::new(),
-    ))
+    Ok(assemble(env, label, seed, every, None, summary, Vec::new()))
 }
 
 /// `s` reduced to file-name-safe characters (letters, digits, `-`, `_`, `.`; others

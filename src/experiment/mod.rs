@@ -19,10 +19,11 @@
 //! [[ablation]]
 //! name = "modality"
 //! title = "Modalities (Fig. 5a)"
-//! configs = ["gru_m1_pca5.toml", "gru_m2_pca5.toml", "gru_m3_pca5.toml"]
+//! configs = ["../gru_m1_pca5.toml", "../gru_m2_pca5.toml", "../gru_m3_pca5.toml"]
 //! ```
 //!
-//! Config paths are relative to the grid file. A config named by several ablations is
+//! Config paths are relative to the grid file. Grids live in `configs/grids/` (every
+//! `configs/*.toml` is a training config). A config named by several ablations is
 //! trained once. Run folders are `<out>/<variant>/seed<k>`; a finished run holds
 //! `done.json`. [`run_grid`] skips finished runs and resumes unfinished ones from their
 //! latest checkpoint (with what is left of their minutes), so a grid killed at any moment
@@ -938,7 +939,6 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
             let data: Vec<&&RunRow> = mine.iter().filter(|r| r.state != "missing").collect();
             let fs: Vec<f64> = mine.iter().filter_map(|r| r.final_success).collect();
             let es: Vec<f64> = mine.iter().filter_map(|r| r.eval_success).collect();
-            let n = data.len().max(1) as f64;
             VariantRow {
                 variant: v.name.clone(),
                 label: v.label.clone(),
@@ -953,8 +953,8 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
                 finished: mine.iter().filter(|r| r.state == "done").count(),
                 with_data: data.len(),
                 final_success: mean_std(&fs),
-                transitions: data.iter().map(|r| r.transitions as f64).sum::<f64>() / n,
-                wall_s: data.iter().map(|r| r.wall_s).sum::<f64>() / n,
+                transitions: mean_or_zero(data.iter().map(|r| r.transitions as f64)),
+                wall_s: mean_or_zero(data.iter().map(|r| r.wall_s)),
                 eval_success: mean_std(&es),
             }
         })
@@ -968,6 +968,16 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
         },
         curves,
     ))
+}
+
+/// Mean of `v`, 0 when empty.
+fn mean_or_zero(v: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as f64
+    }
 }
 
 fn pct(v: Option<(f64, f64)>) -> String {
@@ -1004,15 +1014,18 @@ pub fn markdown(plan: &Plan, s: &GridSummary) -> String {
     }
     out.push('\n');
     for v in &s.variants {
+        let (transitions, wall) = if v.with_data == 0 {
+            ("-".to_string(), "-".to_string())
+        } else {
+            (format!("{:.0}", v.transitions), format!("{:.1}", v.wall_s))
+        };
         out.push_str(&format!(
-            "| {} | {} | {}/{} | {} | {:.0} | {:.1} |",
+            "| {} | {} | {}/{} | {} | {transitions} | {wall} |",
             v.variant,
             v.label,
             v.finished,
             v.seeds,
             pct(v.final_success),
-            v.transitions,
-            v.wall_s
         ));
         if eval.is_some() {
             out.push_str(&format!(" {} |", pct(v.eval_success)));
