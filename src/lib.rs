@@ -12,7 +12,10 @@
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
 //!   textbook control task.
-//! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout.
+//! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout; episode
+//!   recordings with a 3D replay page.
+//! - [`experiment`]: grids of training runs (the paper's ablations), summaries and Fig.-5
+//!   style plots.
 //! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 //! - [`run`]: grasp attempts on a hand-arm system: the simulator behind the hardware
@@ -20,6 +23,7 @@
 
 pub mod env;
 pub mod eval;
+pub mod experiment;
 pub mod hardware;
 pub mod objects;
 pub mod policy;

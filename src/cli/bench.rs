@@ -28,6 +28,42 @@ pub enum BenchCommand {
     /// in one VecEnv (the learner's harness), environment steps per second.
     #[command(after_help = "Example:\n  grasp bench env --envs 20 --seconds 20 --json")]
     Env(BenchEnvArgs),
+    /// CI regression check: a fixed-seed evaluation of baseline 2 and the shipped policy
+    /// on a few objects plus the environment throughput, printed as JSON and compared
+    /// with the committed reference (success counts within ±1 episode per agent,
+    /// throughput at least 0.3x); exits non-zero naming each regressed figure.
+    #[command(
+        after_help = "Examples:\n  grasp bench regression\n  grasp bench regression --update   # rewrite ci/reference.json after an intended change"
+    )]
+    Regression(BenchRegressionArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchRegressionArgs {
+    /// The reference figures (JSON).
+    #[arg(long, default_value = "ci/reference.json")]
+    pub reference: PathBuf,
+    /// Write the measured figures as the new reference (atomically) instead of comparing.
+    #[arg(long)]
+    pub update: bool,
+    /// The policy checkpoint folder.
+    #[arg(long, default_value = "assets/policies/quick_gru_m3_pca5")]
+    pub policy: PathBuf,
+    /// Objects.
+    #[arg(long, default_value = "box_gelatin,cylinder_wood,can_soup,apple")]
+    pub objects: String,
+    /// Trials per object.
+    #[arg(long, default_value_t = 3)]
+    pub trials: usize,
+    /// Threads (default: available cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Environments of the throughput measurement.
+    #[arg(long, default_value_t = 4)]
+    pub envs: usize,
+    /// Environment steps of the throughput measurement.
+    #[arg(long, default_value_t = 200)]
+    pub steps: usize,
 }
 
 #[derive(Debug, Args)]
@@ -66,7 +102,69 @@ pub fn run(a: BenchArgs, g: &Global) -> Result<()> {
     match a.command {
         BenchCommand::Sim(a) => sim(a, g),
         BenchCommand::Env(a) => env(a, g),
+        BenchCommand::Regression(a) => regression(a, g),
     }
+}
+
+fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
+    use grasp::eval::regression::{compare, measure, Reference, RegressionSetup};
+    if a.trials == 0 || a.envs == 0 || a.steps == 0 {
+        anyhow::bail!("--trials, --envs and --steps must be at least 1");
+    }
+    // Read the reference first: a broken file is reported before minutes of measuring.
+    let reference = if a.update {
+        None
+    } else {
+        let text = std::fs::read_to_string(&a.reference).with_context(|| {
+            format!(
+                "reading the reference {} (create it with --update)",
+                a.reference.display()
+            )
+        })?;
+        let r: Reference = serde_json::from_str(&text)
+            .with_context(|| format!("parsing the reference {}", a.reference.display()))?;
+        Some(r)
+    };
+    let setup = RegressionSetup {
+        objects: super::rollout::sim_objects(&a.objects)?,
+        trials: a.trials,
+        seed: g.seed.unwrap_or(0),
+        policy: a.policy.clone(),
+        threads: super::rollout::threads(a.threads),
+        throughput_envs: a.envs,
+        throughput_steps: a.steps,
+    };
+    let figures =
+        measure(&setup).with_context(|| format!("measuring with {}", a.policy.display()))?;
+    let Some(reference) = reference else {
+        let r = Reference::from_figures(figures);
+        let text = serde_json::to_string_pretty(&r)? + "\n";
+        grasp::util::fsx::write_atomic(&a.reference, text.as_bytes())
+            .with_context(|| format!("writing {}", a.reference.display()))?;
+        println!("{text}");
+        if !g.quiet {
+            eprintln!("wrote the new reference {}", a.reference.display());
+        }
+        return Ok(());
+    };
+    let regressions = compare(&figures, &reference);
+    let out = serde_json::json!({
+        "figures": figures,
+        "reference": reference.figures,
+        "regressions": regressions,
+    });
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    if !regressions.is_empty() {
+        anyhow::bail!(
+            "regression against {}: {}",
+            a.reference.display(),
+            regressions.join("; ")
+        );
+    }
+    if !g.quiet {
+        eprintln!("no regression against {}", a.reference.display());
+    }
+    Ok(())
 }
 
 fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {

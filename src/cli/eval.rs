@@ -6,7 +6,8 @@ use grasp::env::api::Env;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv};
 use grasp::env::obs::Modality;
-use grasp::eval::{csv_table, evaluate, markdown_table, AgentSpec};
+use grasp::eval::record::{write_index, RecordOptions};
+use grasp::eval::{checkpoint_setup, csv_table, evaluate, markdown_table, AgentSpec};
 use grasp::robot::{Robot, Side};
 use grasp::sim::SimConfig;
 use grasp::util::fsx::write_atomic;
@@ -18,7 +19,7 @@ use super::Global;
 /// Evaluate agents per object on identical initial poses and print a Table-I-style table.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policy --objects unseen --json"
+    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint."
 )]
 pub struct EvalArgs {
     /// Agents: baseline1, baseline2, or a checkpoint folder; repeat or separate by commas.
@@ -36,15 +37,18 @@ pub struct EvalArgs {
     /// Also write one CSV row per (agent, object) to this file.
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Synergy model (JSON); the shipped model when absent.
+    /// Synergy model (JSON) of the baselines and of checkpoints saved without one; the
+    /// shipped model when absent. Checkpoints use the synergy.json saved beside them.
     #[arg(long)]
     pub synergy: Option<PathBuf>,
-    /// Synergy components the policies act in.
-    #[arg(long, default_value_t = 5)]
-    pub components: usize,
-    /// Sensing modality the policies observe (M1, M2, M3).
-    #[arg(long, default_value = "M3")]
-    pub modality: Modality,
+    /// Synergy components (baselines; default 5). Checkpoints use the number in their
+    /// config.toml: a different value is an error.
+    #[arg(long)]
+    pub components: Option<usize>,
+    /// Sensing modality M1, M2 or M3 (baselines; default M3). Checkpoints use the one in
+    /// their config.toml: a different value is an error.
+    #[arg(long)]
+    pub modality: Option<Modality>,
     /// Curriculum success rate r_s that sets the start-pose randomisation (eq. 6).
     #[arg(long, default_value_t = 1.0)]
     pub difficulty: f64,
@@ -54,6 +58,13 @@ pub struct EvalArgs {
     /// Worker threads (default: available cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Record every episode into this folder: a JSON file and a 3D replay page (HTML,
+    /// opens offline) per episode, and index.html.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Physics steps between two recorded frames.
+    #[arg(long, default_value_t = 4)]
+    pub record_every: u64,
 }
 
 fn agent_spec(s: &str) -> Result<AgentSpec> {
@@ -73,6 +84,77 @@ fn agent_spec(s: &str) -> Result<AgentSpec> {
     })
 }
 
+/// The environment settings and synergy model of one agent.
+struct AgentEnv {
+    spec: AgentSpec,
+    env: EnvConfig,
+    model: grasp::synergy::SynergyModel,
+}
+
+/// Resolves each agent's environment: checkpoints from their own config.toml, baselines
+/// (and checkpoints without one) from the flags.
+fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<AgentEnv>> {
+    let curriculum = CurriculumConfig {
+        enabled: false,
+        fixed_rate: a.difficulty,
+        ..CurriculumConfig::default()
+    };
+    let flag_env = EnvConfig {
+        modality: a.modality.unwrap_or(Modality::M3),
+        curriculum: curriculum.clone(),
+        ..EnvConfig::default()
+    };
+    let flag_components = a.components.unwrap_or(5);
+    let flag_model = || load_synergy(a.synergy.as_ref(), flag_components);
+    specs
+        .into_iter()
+        .map(|spec| {
+            let AgentSpec::Checkpoint(dir) = &spec else {
+                return Ok(AgentEnv {
+                    spec,
+                    env: flag_env.clone(),
+                    model: flag_model()?,
+                });
+            };
+            let setup = checkpoint_setup(dir)
+                .with_context(|| format!("reading the setup of checkpoint {}", dir.display()))?;
+            let Some(setup) = setup else {
+                if !g.quiet {
+                    eprintln!(
+                        "warning: {} has no config.toml; using --modality/--components",
+                        dir.display()
+                    );
+                }
+                return Ok(AgentEnv {
+                    spec,
+                    env: flag_env.clone(),
+                    model: flag_model()?,
+                });
+            };
+            setup.check_flags(dir, a.modality, a.components)?;
+            if a.synergy.is_some() && setup.synergy.is_some() && !g.quiet {
+                eprintln!(
+                    "warning: {} uses the synergy.json saved beside it, not --synergy",
+                    dir.display()
+                );
+            }
+            let model = if setup.synergy.is_some() {
+                setup.synergy_model()?
+            } else {
+                load_synergy(a.synergy.as_ref(), setup.n_components)?
+            };
+            Ok(AgentEnv {
+                env: EnvConfig {
+                    curriculum: curriculum.clone(),
+                    ..setup.env
+                },
+                spec,
+                model,
+            })
+        })
+        .collect()
+}
+
 pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     if a.trials == 0 {
         bail!("--trials must be at least 1");
@@ -80,69 +162,85 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     if !(0.0..=1.0).contains(&a.difficulty) {
         bail!("--difficulty must be in [0, 1], got {}", a.difficulty);
     }
+    if a.record_every == 0 {
+        bail!("--record-every must be at least 1");
+    }
     let specs = a
         .policy
         .iter()
         .map(|s| agent_spec(s))
         .collect::<Result<Vec<_>>>()?;
     let robot = Robot::builtin(Side::Left);
-    let model = load_synergy(a.synergy.as_ref(), a.components)?;
     let sim_cfg = match &a.sim_config {
         Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
         None => SimConfig::default(),
     };
     let objects = sim_objects(&a.objects)?;
     let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
-    let env_cfg = EnvConfig {
-        modality: a.modality,
-        curriculum: CurriculumConfig {
-            enabled: false,
-            fixed_rate: a.difficulty,
-            ..CurriculumConfig::default()
-        },
-        ..EnvConfig::default()
-    };
-    let make_env = |o: usize| {
-        GraspEnv::new(
-            &robot,
-            vec![objects[o].clone()],
-            model.clone(),
-            sim_cfg.clone(),
-            env_cfg.clone(),
-        )
-    };
-    // A checkpoint must match the observation layout it will see.
-    let probe = make_env(0)?;
-    for s in &specs {
-        if let AgentSpec::Checkpoint(dir) = s {
+    let agents = agent_envs(&a, specs, g)?;
+    let record = a.record.as_ref().map(|dir| RecordOptions {
+        dir: dir.clone(),
+        every: a.record_every,
+    });
+    let seed = g.seed.unwrap_or(0);
+    let n_threads = threads(a.threads);
+    let mut results = Vec::new();
+    for ag in &agents {
+        let make_env = |o: usize| {
+            GraspEnv::new(
+                &robot,
+                vec![objects[o].clone()],
+                ag.model.clone(),
+                sim_cfg.clone(),
+                ag.env.clone(),
+            )
+        };
+        // A checkpoint must match the observation layout it will see.
+        if let AgentSpec::Checkpoint(dir) = &ag.spec {
+            let probe = make_env(0)?;
             let p = grasp::ppo::load_policy(dir)
                 .with_context(|| format!("loading checkpoint {}", dir.display()))?;
             if p.policy.obs_dim() != probe.obs_dim() {
                 bail!(
-                    "checkpoint {} expects observations of length {}, but {:?} with {} components gives {}: pass the --modality and --components it was trained with",
+                    "checkpoint {} expects observations of length {}, but {:?} with {} components and history {} gives {}",
                     dir.display(),
                     p.policy.obs_dim(),
-                    a.modality,
-                    a.components,
+                    ag.env.modality,
+                    ag.model.n_components(),
+                    ag.env.history,
                     probe.obs_dim()
                 );
             }
         }
-    }
-    drop(probe);
-    let seed = g.seed.unwrap_or(0);
-    let n_threads = threads(a.threads);
-    let mut results = Vec::new();
-    for s in &specs {
         if !g.quiet {
             eprintln!(
                 "evaluating {} on {} objects x {} trials ...",
-                s.label(),
+                ag.spec.label(),
                 names.len(),
                 a.trials
             );
         }
-        results.push(evaluate(&names, a.trials, seed, n_threads, &make_env, s)?);
+        results.push(evaluate(
+            &names,
+            a.trials,
+            seed,
+            n_threads,
+            &make_env,
+            &ag.spec,
+            record.as_ref(),
+        )?);
+    }
+    if let Some(r) = &record {
+        let entries: Vec<_> = results.iter().flat_map(|r| r.recordings.clone()).collect();
+        let index = write_index(&r.dir, &entries)
+            .with_context(|| format!("writing the index of {}", r.dir.display()))?;
+        if !g.quiet {
+            eprintln!(
+                "recorded {} episodes: open {}",
+                entries.len(),
+                index.display()
+            );
+        }
     }
     if let Some(p) = &a.csv {
         write_atomic(p, csv_table(&results).as_bytes())?;

@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand};
 mod bench;
 mod calibrate;
 mod eval;
+mod experiment;
 mod objects;
 mod pca;
 mod robot;
@@ -65,6 +66,8 @@ pub enum Command {
     Run(run::RunArgs),
     /// Calibrate the fingertip tactile sensors (Sec. V-C) and save the calibration.
     Calibrate(calibrate::CalibrateArgs),
+    /// Run the paper's ablations: a grid of (config, seed) training runs, summary, plots.
+    Experiment(experiment::ExperimentArgs),
 }
 
 /// Sets up `tracing` output on stderr according to `-q`/`-v`.
@@ -101,5 +104,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Train(a) => train::run(a, &global),
         Command::Run(a) => run::run(a, &global),
         Command::Calibrate(a) => calibrate::run(a, &global),
+        Command::Experiment(a) => experiment::run(a, &global),
     }
 }

@@ -4,6 +4,9 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{run_episode, EnvConfig, EpisodeSummary, GraspEnv, RandomAgent};
+use grasp::eval::record::{
+    record_agent_episode, record_baseline_episode, write_index, write_recording, RecordingEntry,
+};
 use grasp::robot::{Robot, Side};
 use grasp::sim::{ObjectSpec, SimConfig};
 use grasp::synergy::SynergyModel;
@@ -16,7 +19,7 @@ use super::Global;
 /// Run episodes of a baseline or a random agent and print each outcome and a summary.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp rollout --policy baseline2 --objects train --episodes 20\n  grasp rollout --policy random --objects box_sugar,bottle_tall --episodes 8 --json"
+    after_help = "Examples:\n  grasp rollout --policy baseline2 --objects train --episodes 20\n  grasp rollout --policy random --objects box_sugar,bottle_tall --episodes 8 --json\n  grasp rollout --policy baseline2 --objects can_soup --episodes 2 --record rec/ && xdg-open rec/index.html"
 )]
 pub struct RolloutArgs {
     /// The agent: baseline1, baseline2 or random.
@@ -43,6 +46,13 @@ pub struct RolloutArgs {
     /// Worker threads (default: available cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Record every episode into this folder: a JSON file and a 3D replay page (HTML,
+    /// opens offline) per episode, and index.html.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Physics steps between two recorded frames.
+    #[arg(long, default_value_t = 4)]
+    pub record_every: u64,
 }
 
 /// Loads the synergy model (shipped one by default) with `n` components.
@@ -90,6 +100,9 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     if a.episodes == 0 {
         bail!("--episodes must be at least 1");
     }
+    if a.record_every == 0 {
+        bail!("--record-every must be at least 1");
+    }
     if !(0.0..=1.0).contains(&a.difficulty) {
         bail!("--difficulty must be in [0, 1], got {}", a.difficulty);
     }
@@ -120,10 +133,11 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     let chunks: Vec<Vec<usize>> = (0..n_threads)
         .map(|t| (t..a.episodes).step_by(n_threads).collect())
         .collect();
-    let results: Vec<Vec<(usize, EpisodeSummary)>> = pool.install(|| {
+    type Done = (usize, EpisodeSummary, Option<RecordingEntry>);
+    let results: Vec<Vec<Done>> = pool.install(|| {
         chunks
             .par_iter()
-            .map(|idx| -> Result<Vec<(usize, EpisodeSummary)>> {
+            .map(|idx| -> Result<Vec<Done>> {
                 let mut env = GraspEnv::new(
                     &robot,
                     objects.clone(),
@@ -135,19 +149,54 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
                 idx.iter()
                     .map(|&i| {
                         let s = grasp::env::api::episode_seed(seed, 0, i as u64);
+                        if let Some(dir) = &a.record {
+                            let rec = match kind {
+                                0 => record_agent_episode(
+                                    &mut env,
+                                    &mut RandomAgent::new(n, 0.15, s),
+                                    &a.policy,
+                                    s,
+                                    a.record_every,
+                                ),
+                                k => record_baseline_episode(
+                                    &mut env,
+                                    k == 2,
+                                    &a.policy,
+                                    s,
+                                    a.record_every,
+                                )?,
+                            };
+                            let entry = write_recording(dir, &rec, i).with_context(|| {
+                                format!("writing a recording into {}", dir.display())
+                            })?;
+                            return Ok((i, rec.summary, Some(entry)));
+                        }
                         let r = match kind {
                             0 => run_episode(&mut env, &mut RandomAgent::new(n, 0.15, s), s),
                             k => env.run_baseline(k == 2, s)?,
                         };
-                        Ok((i, r))
+                        Ok((i, r, None))
                     })
                     .collect()
             })
             .collect::<Result<Vec<_>>>()
     })?;
     let wall = start.elapsed().as_secs_f64();
-    let mut all: Vec<(usize, EpisodeSummary)> = results.into_iter().flatten().collect();
-    all.sort_by_key(|(i, _)| *i);
+    let mut done: Vec<Done> = results.into_iter().flatten().collect();
+    done.sort_by_key(|d| d.0);
+    if let Some(dir) = &a.record {
+        let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
+        let index = write_index(dir, &entries)
+            .with_context(|| format!("writing the index of {}", dir.display()))?;
+        if !g.quiet {
+            eprintln!(
+                "recorded {} episodes: open {}",
+                entries.len(),
+                index.display()
+            );
+        }
+    }
+    let all: Vec<(usize, EpisodeSummary)> = done.into_iter().map(|d| (d.0, d.1)).collect();
     let n = all.len() as f64;
     let successes = all.iter().filter(|(_, r)| r.success).count();
     let failures = all.iter().filter(|(_, r)| r.physics_failure).count();

@@ -251,6 +251,13 @@ impl GraspEnv {
         &self.sim
     }
 
+    /// The simulator, mutably, for instrumentation such as episode recordings
+    /// ([`HandSim::start_recording`]). Changing the scene or the targets mid-episode
+    /// breaks the MDP.
+    pub fn sim_mut(&mut self) -> &mut HandSim {
+        &mut self.sim
+    }
+
     /// The curriculum's current success rate `r_s`.
     pub fn curriculum_rate(&self) -> f64 {
         self.curriculum.rate()

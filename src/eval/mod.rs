@@ -1,14 +1,27 @@
 //! Evaluation: per-object success rates of learned and scripted agents on identical
 //! initial poses (common random numbers), with Wilson 95 % confidence intervals, in the
 //! layout of the paper's Table I.
+//!
+//! - [`evaluate`]: one agent on every object of a set, trials seeded per (object, trial);
+//! - [`checkpoint_setup`]: the environment a checkpoint was trained in, read from the
+//!   `config.toml` saved beside it, so evaluations observe what the policy expects;
+//! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
+//! - [`regression`]: the CI regression check against committed reference figures.
+
+pub mod record;
+pub mod regression;
 
 use crate::env::api::Action;
-use crate::env::grasp::{run_episode, Agent, EpisodeSummary, GraspEnv, GraspEnvError};
+use crate::env::grasp::{run_episode, Agent, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError};
+use crate::env::obs::Modality;
 use crate::ppo::LoadedPolicy;
+use crate::synergy::SynergyModel;
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rayon::prelude::*;
+use record::{RecordOptions, RecordingEntry};
 use serde::Serialize;
+use std::path::{Path, PathBuf};
 
 /// Wilson score interval for `k` successes in `n` trials at 95 % (z = 1.96): (low, high).
 /// `n = 0` gives (0, 1).
@@ -160,6 +173,9 @@ pub struct AgentResult {
     pub control_steps_per_s: f64,
     /// Wall time (s).
     pub wall_s: f64,
+    /// Episodes recorded (with `record`), per object then trial.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub recordings: Vec<RecordingEntry>,
 }
 
 /// Seed of trial `t` on object `o`: shared by all agents (common random numbers).
@@ -170,7 +186,8 @@ pub fn trial_seed(seed: u64, object: usize, trial: usize) -> u64 {
 /// Evaluates `agent` on every object of `make_env`'s set for `trials` trials each, in a
 /// pool of `threads` workers. `make_env(o)` builds an environment whose object set is
 /// the single object `o` (so the scene of a trial depends only on its seed), and
-/// `make_agent` builds the agent for a worker.
+/// `make_agent` builds the agent for a worker. With `record`, every episode is also
+/// written as a recording ([`record::write_recording`]); recording changes no outcome.
 pub fn evaluate(
     names: &[String],
     trials: usize,
@@ -178,16 +195,19 @@ pub fn evaluate(
     threads: usize,
     make_env: &(dyn Fn(usize) -> Result<GraspEnv, GraspEnvError> + Sync),
     spec: &AgentSpec,
+    record: Option<&RecordOptions>,
 ) -> Result<AgentResult, EvalError> {
     let start = std::time::Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
         .map_err(|e| EvalError::Agent(e.to_string()))?;
-    let per_object: Vec<Vec<EpisodeSummary>> = pool.install(|| {
+    let label = spec.label();
+    type Trial = (EpisodeSummary, Option<RecordingEntry>);
+    let per_object: Vec<Vec<Trial>> = pool.install(|| {
         (0..names.len())
             .into_par_iter()
-            .map(|o| -> Result<Vec<EpisodeSummary>, EvalError> {
+            .map(|o| -> Result<Vec<Trial>, EvalError> {
                 let mut env = make_env(o)?;
                 let mut agent: Option<PolicyAgent> = match spec {
                     AgentSpec::Checkpoint(dir) => Some(PolicyAgent::new(
@@ -201,12 +221,32 @@ pub fn evaluate(
                 (0..trials)
                     .map(|t| {
                         let s = trial_seed(seed, o, t);
-                        Ok(match (spec, agent.as_mut()) {
-                            (AgentSpec::Baseline1, _) => env.run_baseline(false, s)?,
-                            (AgentSpec::Baseline2, _) => env.run_baseline(true, s)?,
-                            (_, Some(a)) => run_episode(&mut env, a, s),
-                            (_, None) => unreachable!("a checkpoint agent is built above"),
-                        })
+                        let baseline = match spec {
+                            AgentSpec::Baseline1 => Some(false),
+                            AgentSpec::Baseline2 => Some(true),
+                            AgentSpec::Checkpoint(_) => None,
+                        };
+                        if let Some(r) = record {
+                            let rec = match (baseline, agent.as_mut()) {
+                                (Some(stop), _) => record::record_baseline_episode(
+                                    &mut env, stop, &label, s, r.every,
+                                )?,
+                                (None, Some(a)) => {
+                                    record::record_agent_episode(&mut env, a, &label, s, r.every)
+                                }
+                                (None, None) => unreachable!("a checkpoint agent is built above"),
+                            };
+                            let entry = record::write_recording(&r.dir, &rec, t)?;
+                            return Ok((rec.summary, Some(entry)));
+                        }
+                        Ok((
+                            match (baseline, agent.as_mut()) {
+                                (Some(stop), _) => env.run_baseline(stop, s)?,
+                                (None, Some(a)) => run_episode(&mut env, a, s),
+                                (None, None) => unreachable!("a checkpoint agent is built above"),
+                            },
+                            None,
+                        ))
                     })
                     .collect()
             })
@@ -214,8 +254,10 @@ pub fn evaluate(
     })?;
     let wall_s = start.elapsed().as_secs_f64();
     let mut objects = Vec::new();
+    let mut recordings = Vec::new();
     let (mut k_all, mut n_all, mut steps_all) = (0, 0, 0usize);
-    for (name, eps) in names.iter().zip(&per_object) {
+    for (name, trials) in names.iter().zip(per_object) {
+        let eps: Vec<&EpisodeSummary> = trials.iter().map(|t| &t.0).collect();
         let k = eps.iter().filter(|e| e.success).count();
         let n = eps.len();
         let steps: usize = eps.iter().map(|e| e.steps).sum();
@@ -231,17 +273,115 @@ pub fn evaluate(
             mean_steps: steps as f64 / n.max(1) as f64,
             physics_failures: eps.iter().filter(|e| e.physics_failure).count(),
         });
+        recordings.extend(trials.into_iter().filter_map(|t| t.1));
     }
     let mean_rate = objects.iter().map(|o| o.rate).sum::<f64>() / objects.len().max(1) as f64;
     Ok(AgentResult {
-        agent: spec.label(),
+        agent: label,
         mean_rate,
         ci95: wilson(k_all, n_all),
         mean_steps: steps_all as f64 / n_all.max(1) as f64,
         control_steps_per_s: steps_all as f64 / wall_s.max(1e-9),
         wall_s,
         objects,
+        recordings,
     })
+}
+
+/// What a checkpoint was trained with, read from the `config.toml` that `grasp train`
+/// saves beside every checkpoint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckpointSetup {
+    /// The grasping MDP's settings (modality, history, action scales, closing, ...).
+    pub env: EnvConfig,
+    /// Synergy components the policy acts in.
+    pub n_components: usize,
+    /// The synergy model saved beside the checkpoint (`synergy.json`), when present.
+    pub synergy: Option<PathBuf>,
+}
+
+impl CheckpointSetup {
+    /// The synergy model the policy acts in: the one beside the checkpoint, else the
+    /// shipped model, with `n_components` components.
+    pub fn synergy_model(&self) -> Result<SynergyModel, EvalError> {
+        let model = match &self.synergy {
+            Some(p) => SynergyModel::load(p).map_err(|e| EvalError::Checkpoint {
+                path: p.clone(),
+                message: e.to_string(),
+            })?,
+            None => crate::synergy::default_model(),
+        };
+        model
+            .truncated(self.n_components)
+            .map_err(|e| EvalError::Checkpoint {
+                path: self.synergy.clone().unwrap_or_default(),
+                message: e.to_string(),
+            })
+    }
+
+    /// Checks the user's `--modality` / `--components` against the checkpoint: a value
+    /// that differs is an error naming both.
+    pub fn check_flags(
+        &self,
+        dir: &Path,
+        modality: Option<Modality>,
+        components: Option<usize>,
+    ) -> Result<(), EvalError> {
+        if let Some(m) = modality.filter(|m| *m != self.env.modality) {
+            return Err(EvalError::Checkpoint {
+                path: dir.join(crate::train::session::files::CONFIG),
+                message: format!(
+                    "the checkpoint was trained with modality {:?}, not {m:?}: drop --modality",
+                    self.env.modality
+                ),
+            });
+        }
+        if let Some(n) = components.filter(|n| *n != self.n_components) {
+            return Err(EvalError::Checkpoint {
+                path: dir.join(crate::train::session::files::CONFIG),
+                message: format!(
+                    "the checkpoint was trained with {} synergy components, not {n}: drop \
+                     --components",
+                    self.n_components
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Reads the training config beside the checkpoint in `dir`. `Ok(None)` when the folder
+/// has no `config.toml` (a checkpoint not written by `grasp train`); an error when the
+/// file is malformed or describes another environment than the grasping MDP.
+pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError> {
+    use crate::train::{session::files, EnvKind, TrainConfig};
+    let path = dir.join(files::CONFIG);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path).map_err(|e| EvalError::Checkpoint {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    let cfg = TrainConfig::parse(&path, &text).map_err(|e| EvalError::Checkpoint {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    if cfg.env.kind != EnvKind::Grasp {
+        return Err(EvalError::Checkpoint {
+            path,
+            message: format!(
+                "the checkpoint was trained on {:?}, not the grasping environment",
+                cfg.env.kind
+            ),
+        });
+    }
+    let synergy = dir.join(files::SYNERGY);
+    Ok(Some(CheckpointSetup {
+        env: cfg.env.grasp,
+        n_components: cfg.n_components,
+        synergy: synergy.is_file().then_some(synergy),
+    }))
 }
 
 /// Errors of an evaluation.
@@ -256,6 +396,17 @@ pub enum EvalError {
     /// The agent could not be loaded or run.
     #[error("agent: {0}")]
     Agent(String),
+    /// A checkpoint's saved setup is unreadable or does not fit the request.
+    #[error("checkpoint {path}: {message}")]
+    Checkpoint {
+        /// The file (config.toml or synergy.json).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A recording could not be written.
+    #[error(transparent)]
+    Record(#[from] record::RecordError),
 }
 
 /// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
@@ -349,6 +500,7 @@ mod tests {
             mean_steps: 1.0,
             control_steps_per_s: 3.0,
             wall_s: 1.0,
+            recordings: Vec::new(),
         };
         let md = markdown_table(std::slice::from_ref(&r));
         assert!(

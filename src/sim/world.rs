@@ -45,6 +45,9 @@ use rand::{Rng, SeedableRng};
 use rapier3d::prelude::*;
 use serde::Serialize;
 
+#[path = "record.rs"]
+pub mod record;
+
 /// Error of the simulator's inputs (never of the physics: see [`PhysicsFailure`]).
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -291,6 +294,7 @@ pub struct HandSim {
     lift_target: f64,
     physics_steps: u64,
     failure: Option<PhysicsFailure>,
+    recorder: Option<record::FrameRecorder>,
 }
 
 impl HandSim {
@@ -602,6 +606,7 @@ impl HandSim {
             lift_target: 0.0,
             physics_steps: 0,
             failure: None,
+            recorder: None,
         };
         sim.insert_object(object.clone());
         let start = crate::robot::Posture::Open.angles();
@@ -868,6 +873,7 @@ impl HandSim {
         } else {
             self.check_physics()
         };
+        self.record_step();
         self.failure.is_none()
     }
 

@@ -1,5 +1,7 @@
-//! The learning-curve plot: success rate (with the curriculum level) and episode return
-//! against environment transitions, as an SVG drawn with plotters.
+//! The learning-curve plots, SVG drawn with plotters: one run's success rate (with the
+//! curriculum level) and episode return against environment transitions
+//! ([`learning_curve_svg`]), and the paper's Fig.-5 style comparison of variants, each a
+//! mean curve over seeds with a shaded band ([`band_plot_svg`]).
 
 use super::metrics::MetricsRow;
 use super::TrainError;
@@ -130,6 +132,102 @@ pub fn write_learning_curve(
     Ok(())
 }
 
+/// One variant of a band plot: a mean curve with a band (min-max or +-std across seeds).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BandCurve {
+    /// Legend label.
+    pub label: String,
+    /// Points `(x, mean, low, high)`, x ascending.
+    pub points: Vec<(f64, f64, f64, f64)>,
+}
+
+/// Colours of the variants, in order (matplotlib's tab10).
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// Renders curves in the style of the paper's Fig. 5 as SVG text: `y_desc` (e.g. the
+/// success rate, in [0, 1]) against transitions, one colour per variant, the band shaded
+/// under the mean line.
+pub fn band_plot_svg(title: &str, y_desc: &str, curves: &[BandCurve]) -> Result<String, String> {
+    let x_max = curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p.0))
+        .fold(1.0f64, f64::max);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let draw = || -> DrawResult {
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, ("sans-serif", 20))
+                .margin(14)
+                .x_label_area_size(40)
+                .y_label_area_size(56)
+                .build_cartesian_2d(0f64..x_max, 0f64..1f64)?;
+            chart
+                .configure_mesh()
+                .x_desc("transitions")
+                .y_desc(y_desc)
+                .draw()?;
+            for (k, c) in curves.iter().enumerate() {
+                let colour = PALETTE[k % PALETTE.len()];
+                if c.points.len() >= 2 {
+                    let mut outline: Vec<(f64, f64)> = c
+                        .points
+                        .iter()
+                        .map(|p| (p.0, p.3.clamp(0.0, 1.0)))
+                        .collect();
+                    outline.extend(c.points.iter().rev().map(|p| (p.0, p.2.clamp(0.0, 1.0))));
+                    chart.draw_series(std::iter::once(Polygon::new(
+                        outline,
+                        colour.mix(0.18).filled(),
+                    )))?;
+                }
+                chart
+                    .draw_series(LineSeries::new(
+                        c.points.iter().map(|p| (p.0, p.1)),
+                        colour.stroke_width(2),
+                    ))?
+                    .label(c.label.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()?;
+            Ok(())
+        };
+        draw().map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+/// Draws [`band_plot_svg`] to `path` (written atomically).
+pub fn write_band_plot(
+    path: &Path,
+    title: &str,
+    y_desc: &str,
+    curves: &[BandCurve],
+) -> Result<(), TrainError> {
+    let svg = band_plot_svg(title, y_desc, curves).map_err(|message| TrainError::Plot {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    crate::util::fsx::write_atomic(path, svg.as_bytes())?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -164,6 +262,36 @@ mod tests {
         let svg = learning_curve_svg("g", &rows).unwrap();
         assert!(svg.contains("g: success") && svg.contains("curriculum r_s"));
         assert!(learning_curve_svg("empty", &[]).is_ok());
+    }
+
+    #[test]
+    fn band_plot_draws_a_band_and_a_line_per_variant() {
+        let curve = |label: &str, y: f64| BandCurve {
+            label: label.into(),
+            points: (0..5)
+                .map(|k| (1000.0 * k as f64, y, y - 0.1, y + 0.1))
+                .collect(),
+        };
+        let svg = band_plot_svg(
+            "Fig. 5a",
+            "success rate",
+            &[curve("GRU-M1PCA5", 0.3), curve("GRU-M3PCA5", 0.6)],
+        )
+        .unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("Fig. 5a"));
+        assert!(svg.contains("GRU-M1PCA5") && svg.contains("GRU-M3PCA5"));
+        // Two filled bands (polygons) with the palette's first two colours.
+        assert_eq!(svg.matches("<polygon").count(), 2, "{svg}");
+        assert!(svg.contains("#1F77B4") || svg.contains("#1f77b4"));
+        // A single point draws no band, and no curves at all is fine.
+        let one = BandCurve {
+            label: "x".into(),
+            points: vec![(1.0, 0.5, 0.5, 0.5)],
+        };
+        assert!(!band_plot_svg("t", "y", &[one])
+            .unwrap()
+            .contains("<polygon"));
+        assert!(band_plot_svg("t", "y", &[]).is_ok());
     }
 
     #[test]

@@ -1,0 +1,1193 @@
+//! Experiment grids: the paper's ablations (Sec. V-A, Fig. 5) as many training runs,
+//! one per (variant config, seed), run through [`crate::train::TrainSession`], then
+//! summarised and plotted.
+//!
+//! A grid is a TOML file ([`GridConfig`]):
+//!
+//! ```toml
+//! name = "paper_ablation"
+//! seeds = [1, 2, 3]
+//! parallel = 1                 # runs at once; the cores are split between them
+//! [budget]                     # per run: whichever ends first
+//! transitions = 2000000
+//! minutes = 480.0
+//! [overrides]                  # applied to every run's config (all optional)
+//! num_envs = 20
+//! [eval]                       # optional: evaluate each run's latest checkpoint
+//! objects = "unseen"
+//! trials = 3
+//! [[ablation]]
+//! name = "modality"
+//! title = "Modalities (Fig. 5a)"
+//! configs = ["../gru_m1_pca5.toml", "../gru_m2_pca5.toml", "../gru_m3_pca5.toml"]
+//! ```
+//!
+//! Config paths are relative to the grid file. Grids live in `configs/grids/` (every
+//! `configs/*.toml` is a training config). A config named by several ablations is
+//! trained once. Run folders are `<out>/<variant>/seed<k>`; a finished run holds
+//! `done.json`. [`run_grid`] skips finished runs and resumes unfinished ones from their
+//! latest checkpoint (with what is left of their minutes), so a grid killed at any moment
+//! continues where it stopped. [`summarize`] and [`write_reports`] read the run folders
+//! and write `summary.md`, `summary.csv` (per variant), `runs.csv` (per run) and one
+//! `<ablation>.svg` per ablation: the success rate against transitions, mean over seeds
+//! with a min-max band.
+
+pub mod curves;
+
+use crate::env::curriculum::CurriculumConfig;
+use crate::env::grasp::{EnvConfig, GraspEnv};
+use crate::eval::{checkpoint_setup, evaluate, AgentSpec};
+use crate::policy::PolicyKind;
+use crate::robot::{Robot, Side};
+use crate::sim::SimConfig;
+use crate::train::plot::write_band_plot;
+use crate::train::session::{files, latest_dir};
+use crate::train::{metrics, StopReason, TrainConfig, TrainError, TrainSession};
+use crate::util::config::{load_toml, ConfigError};
+use crate::util::fsx::write_atomic;
+use curves::{aggregate, final_success, mean_std, success_curve, Band};
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// Marker file of a finished run.
+pub const DONE_FILE: &str = "done.json";
+/// Cached evaluation of a run.
+pub const EVAL_FILE: &str = "eval.json";
+
+/// Per-run budget: training stops at whichever limit comes first.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunBudget {
+    /// Transitions (`total_timesteps`) per run; the config's value when absent.
+    pub transitions: Option<u64>,
+    /// Wall minutes per run (over resumes); the config's `time_budget_minutes` when absent.
+    pub minutes: Option<f64>,
+}
+
+/// Settings applied to every run's config.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunOverrides {
+    /// Parallel environments.
+    pub num_envs: Option<usize>,
+    /// PPO rollout length per environment.
+    pub num_steps: Option<usize>,
+    /// PPO minibatches per epoch.
+    pub num_minibatches: Option<usize>,
+    /// PPO epochs per update.
+    pub update_epochs: Option<usize>,
+    /// Training objects (anything `--objects` accepts, or `primitives`).
+    pub objects: Option<String>,
+}
+
+/// Optional evaluation of every run's latest checkpoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvalSettings {
+    /// Objects (e.g. `unseen`).
+    pub objects: String,
+    /// Trials per object (0: no evaluation).
+    pub trials: usize,
+    /// Curriculum level of the start poses (eq. 6), 1 = hardest.
+    #[serde(default = "one")]
+    pub difficulty: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// One ablation: the variants compared in one plot.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ablation {
+    /// Short name (file-safe): names the plot `<name>.svg`.
+    pub name: String,
+    /// Plot title (default: the name).
+    pub title: Option<String>,
+    /// Training configs of the variants, relative to the grid file.
+    pub configs: Vec<PathBuf>,
+}
+
+/// A grid file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridConfig {
+    /// Name of the grid (the default output folder is `runs/<name>`).
+    pub name: String,
+    /// Seeds; every variant runs once per seed.
+    pub seeds: Vec<u64>,
+    /// Runs trained at once (the cores are split between them).
+    #[serde(default = "one_usize")]
+    pub parallel: usize,
+    /// Trailing window (updates) of the plotted curves' smoothing.
+    #[serde(default = "five")]
+    pub smooth: usize,
+    /// Updates averaged for the final training success.
+    #[serde(default = "ten")]
+    pub final_window: usize,
+    /// Band of the plots: `minmax` or `std`.
+    #[serde(default = "minmax")]
+    pub band: Band,
+    /// Per-run budget.
+    #[serde(default)]
+    pub budget: RunBudget,
+    /// Settings applied to every run.
+    #[serde(default)]
+    pub overrides: RunOverrides,
+    /// Optional evaluation.
+    pub eval: Option<EvalSettings>,
+    /// The ablations.
+    pub ablation: Vec<Ablation>,
+}
+
+fn one_usize() -> usize {
+    1
+}
+fn five() -> usize {
+    5
+}
+fn ten() -> usize {
+    10
+}
+fn minmax() -> Band {
+    Band::MinMax
+}
+
+/// Errors of an experiment grid.
+#[derive(Debug, thiserror::Error)]
+pub enum ExperimentError {
+    /// The grid file could not be read or parsed.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// A grid value is invalid.
+    #[error("invalid grid {path}: `{field}`: {message}")]
+    Value {
+        /// The grid file.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A variant's training config is invalid (or a run failed).
+    #[error("{context}: {source}")]
+    Train {
+        /// The config or run folder.
+        context: String,
+        /// The cause.
+        source: TrainError,
+    },
+    /// The output folder already holds runs of this grid.
+    #[error(
+        "{dir} already holds runs of this grid: pass --resume to continue them, or another --out"
+    )]
+    Exists {
+        /// The output folder.
+        dir: PathBuf,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// An evaluation failed.
+    #[error("evaluating {dir}: {source}")]
+    Eval {
+        /// The run folder.
+        dir: PathBuf,
+        /// The cause.
+        source: crate::eval::EvalError,
+    },
+}
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> ExperimentError {
+    ExperimentError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// A variant: one training config with the grid's budget and overrides applied.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variant {
+    /// The config's `name` (names the variant's folder).
+    pub name: String,
+    /// The paper's name of the setting, e.g. `GRU-M3PCA5`.
+    pub label: String,
+    /// The config file.
+    pub path: PathBuf,
+    /// The resolved config (seed set per run).
+    pub config: TrainConfig,
+}
+
+/// One (variant, seed) run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedRun {
+    /// Index into [`Plan::variants`].
+    pub variant: usize,
+    /// The seed.
+    pub seed: u64,
+    /// The run folder.
+    pub dir: PathBuf,
+}
+
+/// A grid resolved against its configs and output folder.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// The grid.
+    pub grid: GridConfig,
+    /// The grid file.
+    pub path: PathBuf,
+    /// The output folder.
+    pub out: PathBuf,
+    /// Distinct variants, in order of first mention.
+    pub variants: Vec<Variant>,
+    /// For each ablation, the indices of its variants.
+    pub ablations: Vec<Vec<usize>>,
+    /// Every run, variant-major.
+    pub runs: Vec<PlannedRun>,
+}
+
+/// The paper's name of a config's setting: `GRU-M3PCA5` style.
+pub fn paper_label(cfg: &TrainConfig) -> String {
+    let kind = match cfg.policy.kind {
+        PolicyKind::Gru => "GRU",
+        PolicyKind::Mlp => "MLP",
+    };
+    format!("{kind}-{:?}PCA{}", cfg.env.grasp.modality, cfg.n_components)
+}
+
+impl GridConfig {
+    /// Loads and validates a grid file (errors name the file, line and field).
+    pub fn load(path: &Path) -> Result<GridConfig, ExperimentError> {
+        let g: GridConfig = load_toml(path)?;
+        g.validate(path)?;
+        Ok(g)
+    }
+
+    /// Checks the values; errors name `path` and the field.
+    pub fn validate(&self, path: &Path) -> Result<(), ExperimentError> {
+        let bad = |field: &str, message: String| {
+            Err(ExperimentError::Value {
+                path: path.to_path_buf(),
+                field: field.into(),
+                message,
+            })
+        };
+        let safe = |s: &str| {
+            !s.is_empty()
+                && !s.starts_with('.')
+                && s.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+        };
+        if !safe(&self.name) {
+            return bad(
+                "name",
+                format!("'{}' must be letters, digits, _ - .", self.name),
+            );
+        }
+        if self.seeds.is_empty() {
+            return bad("seeds", "list at least one seed".into());
+        }
+        let mut seen = self.seeds.clone();
+        seen.sort_unstable();
+        seen.dedup();
+        if seen.len() != self.seeds.len() {
+            return bad("seeds", "a seed is listed twice".into());
+        }
+        if self.parallel == 0 || self.parallel > 64 {
+            return bad("parallel", format!("{} must be in 1..=64", self.parallel));
+        }
+        if self.smooth == 0 || self.final_window == 0 {
+            return bad("smooth/final_window", "must be at least 1".into());
+        }
+        if self.budget.transitions == Some(0) {
+            return bad("budget.transitions", "must be at least 1".into());
+        }
+        if let Some(m) = self.budget.minutes {
+            if !(m.is_finite() && m > 0.0) {
+                return bad("budget.minutes", format!("{m} must be positive"));
+            }
+        }
+        if let Some(e) = &self.eval {
+            if !(0.0..=1.0).contains(&e.difficulty) {
+                return bad(
+                    "eval.difficulty",
+                    format!("{} is outside [0, 1]", e.difficulty),
+                );
+            }
+        }
+        if self.ablation.is_empty() {
+            return bad("ablation", "add at least one [[ablation]]".into());
+        }
+        for (k, a) in self.ablation.iter().enumerate() {
+            if !safe(&a.name) {
+                return bad(
+                    &format!("ablation[{k}].name"),
+                    format!("'{}' must be letters, digits, _ - .", a.name),
+                );
+            }
+            if a.configs.is_empty() {
+                return bad(
+                    &format!("ablation[{k}].configs"),
+                    "list at least one config".into(),
+                );
+            }
+            if self.ablation[..k].iter().any(|b| b.name == a.name) {
+                return bad(
+                    &format!("ablation[{k}].name"),
+                    format!("'{}' is used twice", a.name),
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Resolves the grid at `path` into variants and runs under `out`: every config is
+/// loaded (with its `base` chain) and the budget and overrides applied and validated.
+pub fn plan(path: &Path, out: &Path) -> Result<Plan, ExperimentError> {
+    let grid = GridConfig::load(path)?;
+    let root = path.parent().unwrap_or(Path::new("."));
+    let mut variants: Vec<Variant> = Vec::new();
+    let mut ablations = Vec::new();
+    for a in &grid.ablation {
+        let mut members = Vec::new();
+        for c in &a.configs {
+            let cpath = root.join(c);
+            let idx = match variants.iter().position(|v| v.path == cpath) {
+                Some(i) => i,
+                None => {
+                    let train_err = |source| ExperimentError::Train {
+                        context: format!("config {} (grid {})", cpath.display(), path.display()),
+                        source,
+                    };
+                    let mut cfg = TrainConfig::load(&cpath).map_err(train_err)?;
+                    apply(&grid, &mut cfg);
+                    cfg.validate(&cpath).map_err(train_err)?;
+                    if let Some(other) = variants.iter().find(|v| v.name == cfg.name) {
+                        return Err(ExperimentError::Value {
+                            path: path.to_path_buf(),
+                            field: "ablation.configs".into(),
+                            message: format!(
+                                "{} and {} have the same name '{}' (it names the run folder)",
+                                other.path.display(),
+                                cpath.display(),
+                                cfg.name
+                            ),
+                        });
+                    }
+                    variants.push(Variant {
+                        name: cfg.name.clone(),
+                        label: paper_label(&cfg),
+                        path: cpath.clone(),
+                        config: cfg,
+                    });
+                    variants.len() - 1
+                }
+            };
+            if !members.contains(&idx) {
+                members.push(idx);
+            }
+        }
+        ablations.push(members);
+    }
+    let runs = variants
+        .iter()
+        .enumerate()
+        .flat_map(|(i, v)| {
+            grid.seeds.iter().map(move |&seed| PlannedRun {
+                variant: i,
+                seed,
+                dir: out.join(&v.name).join(format!("seed{seed}")),
+            })
+        })
+        .collect();
+    Ok(Plan {
+        grid,
+        path: path.to_path_buf(),
+        out: out.to_path_buf(),
+        variants,
+        ablations,
+        runs,
+    })
+}
+
+fn apply(grid: &GridConfig, cfg: &mut TrainConfig) {
+    if let Some(t) = grid.budget.transitions {
+        cfg.total_timesteps = t;
+    }
+    if let Some(m) = grid.budget.minutes {
+        cfg.time_budget_minutes = Some(m);
+    }
+    let o = &grid.overrides;
+    if let Some(n) = o.num_envs {
+        cfg.num_envs = n;
+    }
+    if let Some(n) = o.num_steps {
+        cfg.ppo.num_steps = n;
+    }
+    if let Some(n) = o.num_minibatches {
+        cfg.ppo.num_minibatches = n;
+    }
+    if let Some(n) = o.update_epochs {
+        cfg.ppo.update_epochs = n;
+    }
+    if let Some(s) = &o.objects {
+        cfg.objects = s.clone();
+    }
+}
+
+/// The record of a finished run (`done.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunRecord {
+    /// Variant name.
+    pub variant: String,
+    /// Seed.
+    pub seed: u64,
+    /// PPO updates.
+    pub updates: u64,
+    /// Transitions collected.
+    pub transitions: u64,
+    /// Episodes finished.
+    pub episodes: u64,
+    /// Training wall time over all resumes (s).
+    pub wall_s: f64,
+    /// `completed` (all transitions) or `time_budget` (the run's minutes).
+    pub stop: String,
+}
+
+/// Where a run stands on disk.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunState {
+    /// Finished (`done.json`).
+    Done(RunRecord),
+    /// Started: it has a latest checkpoint.
+    Partial,
+    /// Not started (or killed before its first checkpoint).
+    New,
+}
+
+/// Reads the state of the run folder `dir`.
+pub fn run_state(dir: &Path) -> Result<RunState, ExperimentError> {
+    let done = dir.join(DONE_FILE);
+    if done.is_file() {
+        let text = std::fs::read_to_string(&done).map_err(|e| io_err(&done, e))?;
+        let r: RunRecord = serde_json::from_str(&text).map_err(|e| io_err(&done, e))?;
+        return Ok(RunState::Done(r));
+    }
+    if latest_dir(dir).join(crate::ppo::CHECKPOINT_FILE).is_file() {
+        return Ok(RunState::Partial);
+    }
+    Ok(RunState::New)
+}
+
+/// How [`run_grid`] runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridOptions {
+    /// Wall minutes for this invocation: no run starts after it, running ones stop (with a
+    /// checkpoint) when it ends, unfinished runs resume next time.
+    pub budget_minutes: Option<f64>,
+    /// Continue a grid whose output folder already holds runs.
+    pub resume: bool,
+    /// Cores to use in total (split between parallel runs).
+    pub threads: usize,
+    /// Runs at once (default: the grid's `parallel`).
+    pub parallel: Option<usize>,
+}
+
+/// What happened to one run in [`run_grid`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunOutcome {
+    /// Variant name.
+    pub variant: String,
+    /// Seed.
+    pub seed: u64,
+    /// The run folder.
+    pub dir: PathBuf,
+    /// `skipped` (already finished), `finished`, `stopped` (grid budget; resumable) or
+    /// `not_started` (grid budget).
+    pub status: String,
+    /// Training wall time spent in this invocation (s).
+    pub wall_s: f64,
+}
+
+/// Trains every unfinished run of `plan` (see the module docs); `log` receives one line
+/// per started and ended run. Runs are taken in order by `parallel` workers, each with
+/// `threads / parallel` environment threads.
+pub fn run_grid(
+    plan: &Plan,
+    opts: &GridOptions,
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<RunOutcome>, ExperimentError> {
+    let states = plan
+        .runs
+        .iter()
+        .map(|r| run_state(&r.dir))
+        .collect::<Result<Vec<_>, _>>()?;
+    if !opts.resume && states.iter().any(|s| *s != RunState::New) {
+        return Err(ExperimentError::Exists {
+            dir: plan.out.clone(),
+        });
+    }
+    std::fs::create_dir_all(&plan.out).map_err(|e| io_err(&plan.out, e))?;
+    let parallel = opts.parallel.unwrap_or(plan.grid.parallel).max(1);
+    let threads = (opts.threads / parallel).max(1);
+    let deadline = opts
+        .budget_minutes
+        .map(|m| Instant::now() + std::time::Duration::from_secs_f64(m * 60.0));
+    let queue: Mutex<VecDeque<usize>> = Mutex::new((0..plan.runs.len()).collect());
+    let results: Mutex<Vec<(usize, RunOutcome)>> = Mutex::new(Vec::new());
+    let first_error: Mutex<Option<ExperimentError>> = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..parallel.min(plan.runs.len()) {
+            scope.spawn(|| loop {
+                if first_error.lock().map_or(true, |e| e.is_some()) {
+                    return;
+                }
+                let Some(i) = queue.lock().ok().and_then(|mut q| q.pop_front()) else {
+                    return;
+                };
+                let r = &plan.runs[i];
+                let outcome = match &states[i] {
+                    RunState::Done(_) => Ok(outcome(plan, r, "skipped", 0.0)),
+                    _ => execute(plan, r, threads, deadline, log),
+                };
+                match outcome {
+                    Ok(o) => {
+                        if let Ok(mut v) = results.lock() {
+                            v.push((i, o));
+                        }
+                    }
+                    Err(e) => {
+                        if let Ok(mut f) = first_error.lock() {
+                            f.get_or_insert(e);
+                        }
+                    }
+                }
+            });
+        }
+    });
+    if let Some(e) = first_error.into_inner().ok().flatten() {
+        return Err(e);
+    }
+    let mut v = results.into_inner().unwrap_or_default();
+    v.sort_by_key(|x| x.0);
+    Ok(v.into_iter().map(|x| x.1).collect())
+}
+
+fn outcome(plan: &Plan, r: &PlannedRun, status: &str, wall_s: f64) -> RunOutcome {
+    RunOutcome {
+        variant: plan.variants[r.variant].name.clone(),
+        seed: r.seed,
+        dir: r.dir.clone(),
+        status: status.into(),
+        wall_s,
+    }
+}
+
+/// Trains (or resumes) one run within the grid's deadline.
+fn execute(
+    plan: &Plan,
+    r: &PlannedRun,
+    threads: usize,
+    deadline: Option<Instant>,
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<RunOutcome, ExperimentError> {
+    let v = &plan.variants[r.variant];
+    let train_err = |source| ExperimentError::Train {
+        context: format!("run {}", r.dir.display()),
+        source,
+    };
+    let grid_left = deadline.map(|d| d.saturating_duration_since(Instant::now()).as_secs_f64());
+    if grid_left.is_some_and(|s| s < 1.0) {
+        return Ok(outcome(plan, r, "not_started", 0.0));
+    }
+    let resume = run_state(&r.dir)? == RunState::Partial;
+    let metrics_path = r.dir.join(files::METRICS);
+    let spent = if resume && metrics_path.is_file() {
+        metrics::read_csv(&metrics_path)
+            .map_err(train_err)?
+            .last()
+            .map_or(0.0, |row| row.wall_s)
+    } else {
+        0.0
+    };
+    if !resume && r.dir.exists() {
+        // Killed before its first checkpoint: nothing to continue from.
+        std::fs::remove_dir_all(&r.dir).map_err(|e| io_err(&r.dir, e))?;
+    }
+    let mut cfg = v.config.clone();
+    cfg.seed = r.seed;
+    cfg.threads = Some(threads);
+    let own_left = cfg.time_budget_minutes.map(|m| m * 60.0 - spent);
+    let left = match (own_left, grid_left) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
+    cfg.time_budget_minutes = left.map(|s| s.max(1.0) / 60.0);
+    log(&format!(
+        "{} {} seed {} ({} transitions, {} threads{})",
+        if resume { "resuming" } else { "starting" },
+        v.name,
+        r.seed,
+        cfg.total_timesteps,
+        threads,
+        left.map_or(String::new(), |s| format!(", at most {:.1} min", s / 60.0))
+    ));
+    let own_done = own_left.is_some_and(|s| s < 1.0);
+    let summary = if own_done {
+        None
+    } else {
+        let mut session = TrainSession::open(cfg, &r.dir, resume).map_err(train_err)?;
+        Some(session.run(&mut |_| {}).map_err(train_err)?)
+    };
+    let (finished, record) = match &summary {
+        None => {
+            // The run's own minutes were already spent before a kill.
+            let rows = metrics::read_csv(&metrics_path).map_err(train_err)?;
+            let last = rows.last();
+            (
+                true,
+                RunRecord {
+                    variant: v.name.clone(),
+                    seed: r.seed,
+                    updates: last.map_or(0, |x| x.update),
+                    transitions: last.map_or(0, |x| x.global_step),
+                    episodes: last.map_or(0, |x| x.episodes),
+                    wall_s: spent,
+                    stop: "time_budget".into(),
+                },
+            )
+        }
+        Some(s) => {
+            let own_total = v.config.time_budget_minutes.map(|m| m * 60.0);
+            let finished =
+                s.stop == StopReason::Completed || own_total.is_some_and(|t| s.wall_s >= t - 1.0);
+            (
+                finished,
+                RunRecord {
+                    variant: v.name.clone(),
+                    seed: r.seed,
+                    updates: s.updates,
+                    transitions: s.global_step,
+                    episodes: s.episodes,
+                    wall_s: s.wall_s,
+                    stop: match s.stop {
+                        StopReason::Completed => "completed".into(),
+                        StopReason::TimeBudget => "time_budget".into(),
+                    },
+                },
+            )
+        }
+    };
+    let this_call = summary.as_ref().map_or(0.0, |s| s.wall_s - spent);
+    if finished {
+        let p = r.dir.join(DONE_FILE);
+        let json = serde_json::to_string_pretty(&record).map_err(|e| io_err(&p, e))?;
+        write_atomic(&p, json.as_bytes()).map_err(|e| io_err(&p, e))?;
+    }
+    log(&format!(
+        "{} {} seed {}: {} transitions, {:.1} s",
+        if finished {
+            "finished"
+        } else {
+            "stopped (grid budget)"
+        },
+        v.name,
+        r.seed,
+        record.transitions,
+        record.wall_s
+    ));
+    Ok(outcome(
+        plan,
+        r,
+        if finished { "finished" } else { "stopped" },
+        this_call,
+    ))
+}
+
+/// The cached evaluation of a run (`eval.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunEval {
+    /// Objects evaluated on.
+    pub objects: String,
+    /// Trials per object.
+    pub trials: usize,
+    /// Start-pose difficulty.
+    pub difficulty: f64,
+    /// Transitions of the evaluated checkpoint.
+    pub transitions: u64,
+    /// Mean success over objects.
+    pub success: f64,
+}
+
+/// Evaluates the latest checkpoint of every finished run on the grid's `[eval]` objects
+/// (cached in `eval.json` while objects, trials, difficulty and the checkpoint match).
+/// `threads` workers; `seed` seeds the trials (common to all runs).
+pub fn evaluate_runs(
+    plan: &Plan,
+    threads: usize,
+    seed: u64,
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<(), ExperimentError> {
+    let Some(e) = plan.grid.eval.as_ref().filter(|e| e.trials > 0) else {
+        return Ok(());
+    };
+    let objects = crate::train::objects::object_set(&e.objects).map_err(|message| {
+        ExperimentError::Value {
+            path: plan.path.clone(),
+            field: "eval.objects".into(),
+            message,
+        }
+    })?;
+    let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
+    let robot = Robot::builtin(Side::Left);
+    for r in &plan.runs {
+        let RunState::Done(rec) = run_state(&r.dir)? else {
+            continue;
+        };
+        let cache = r.dir.join(EVAL_FILE);
+        if let Ok(text) = std::fs::read_to_string(&cache) {
+            if let Ok(c) = serde_json::from_str::<RunEval>(&text) {
+                if c.objects == e.objects
+                    && c.trials == e.trials
+                    && c.difficulty == e.difficulty
+                    && c.transitions == rec.transitions
+                {
+                    continue;
+                }
+            }
+        }
+        let ck = latest_dir(&r.dir);
+        let eval_err = |source| ExperimentError::Eval {
+            dir: r.dir.clone(),
+            source,
+        };
+        let setup = checkpoint_setup(&ck)
+            .map_err(eval_err)?
+            .ok_or_else(|| io_err(&ck.join(files::CONFIG), "missing"))?;
+        let model = setup.synergy_model().map_err(eval_err)?;
+        let sim = match &plan.variants[r.variant].config.sim_config {
+            Some(p) => SimConfig::load(p).map_err(|e| io_err(p, e))?,
+            None => SimConfig::default(),
+        };
+        let env_cfg = EnvConfig {
+            curriculum: CurriculumConfig {
+                enabled: false,
+                fixed_rate: e.difficulty,
+                ..CurriculumConfig::default()
+            },
+            ..setup.env.clone()
+        };
+        let make_env = |o: usize| {
+            GraspEnv::new(
+                &robot,
+                vec![objects[o].clone()],
+                model.clone(),
+                sim.clone(),
+                env_cfg.clone(),
+            )
+        };
+        log(&format!(
+            "evaluating {} seed {} on {} x {} trials",
+            rec.variant, r.seed, e.objects, e.trials
+        ));
+        let res = evaluate(
+            &names,
+            e.trials,
+            seed,
+            threads,
+            &make_env,
+            &AgentSpec::Checkpoint(ck.clone()),
+            None,
+        )
+        .map_err(eval_err)?;
+        let out = RunEval {
+            objects: e.objects.clone(),
+            trials: e.trials,
+            difficulty: e.difficulty,
+            transitions: rec.transitions,
+            success: res.mean_rate,
+        };
+        let json = serde_json::to_string_pretty(&out).map_err(|e| io_err(&cache, e))?;
+        write_atomic(&cache, json.as_bytes()).map_err(|e| io_err(&cache, e))?;
+    }
+    Ok(())
+}
+
+/// One run in the summary.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunRow {
+    /// Variant name.
+    pub variant: String,
+    /// Seed.
+    pub seed: u64,
+    /// `done`, `partial` or `missing`.
+    pub state: String,
+    /// Transitions so far.
+    pub transitions: u64,
+    /// Training wall time so far (s).
+    pub wall_s: f64,
+    /// Final training success ([`curves::final_success`]).
+    pub final_success: Option<f64>,
+    /// Success of the evaluation, when run.
+    pub eval_success: Option<f64>,
+}
+
+/// One variant in the summary: means and sample standard deviations across its seeds
+/// (finished and partial runs alike; `finished` says how many are done).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VariantRow {
+    /// Variant name.
+    pub variant: String,
+    /// The paper's name of the setting.
+    pub label: String,
+    /// Ablations that include it.
+    pub ablations: Vec<String>,
+    /// Seeds planned.
+    pub seeds: usize,
+    /// Runs finished.
+    pub finished: usize,
+    /// Runs with data.
+    pub with_data: usize,
+    /// Final training success: mean and std across seeds.
+    pub final_success: Option<(f64, f64)>,
+    /// Transitions: mean across runs with data.
+    pub transitions: f64,
+    /// Wall time per run: mean across runs with data (s).
+    pub wall_s: f64,
+    /// Evaluation success: mean and std across seeds.
+    pub eval_success: Option<(f64, f64)>,
+}
+
+/// The grid's results.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GridSummary {
+    /// Grid name.
+    pub grid: String,
+    /// Per variant.
+    pub variants: Vec<VariantRow>,
+    /// Per run.
+    pub runs: Vec<RunRow>,
+    /// The plots written (by [`write_reports`]).
+    pub plots: Vec<PathBuf>,
+}
+
+/// Per variant, the smoothed `(transitions, success)` curve of each run with data.
+pub type SeedCurves = Vec<Vec<Vec<(f64, f64)>>>;
+
+/// Reads every run folder of `plan` into a summary (no plots yet) and the runs' curves.
+pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentError> {
+    let g = &plan.grid;
+    let mut runs = Vec::new();
+    // Per variant, the smoothed success curve of each run with data.
+    let mut curves: SeedCurves = vec![Vec::new(); plan.variants.len()];
+    for r in &plan.runs {
+        let v = &plan.variants[r.variant];
+        let state = run_state(&r.dir)?;
+        let mpath = r.dir.join(files::METRICS);
+        let rows = if mpath.is_file() && state != RunState::New {
+            metrics::read_csv(&mpath).map_err(|source| ExperimentError::Train {
+                context: format!("run {}", r.dir.display()),
+                source,
+            })?
+        } else {
+            Vec::new()
+        };
+        let eval_success = std::fs::read_to_string(r.dir.join(EVAL_FILE))
+            .ok()
+            .and_then(|t| serde_json::from_str::<RunEval>(&t).ok())
+            .filter(|c| {
+                g.eval
+                    .as_ref()
+                    .is_some_and(|e| e.objects == c.objects && e.trials == c.trials)
+            })
+            .map(|c| c.success);
+        if !rows.is_empty() {
+            curves[r.variant].push(success_curve(&rows, g.smooth));
+        }
+        let last = rows.last();
+        runs.push(RunRow {
+            variant: v.name.clone(),
+            seed: r.seed,
+            state: match state {
+                RunState::Done(_) => "done",
+                RunState::Partial => "partial",
+                RunState::New => "missing",
+            }
+            .into(),
+            transitions: last.map_or(0, |x| x.global_step),
+            wall_s: last.map_or(0.0, |x| x.wall_s),
+            final_success: final_success(&rows, g.final_window),
+            eval_success,
+        });
+    }
+    let variants = plan
+        .variants
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let mine: Vec<&RunRow> = runs.iter().filter(|r| r.variant == v.name).collect();
+            let data: Vec<&&RunRow> = mine.iter().filter(|r| r.state != "missing").collect();
+            let fs: Vec<f64> = mine.iter().filter_map(|r| r.final_success).collect();
+            let es: Vec<f64> = mine.iter().filter_map(|r| r.eval_success).collect();
+            VariantRow {
+                variant: v.name.clone(),
+                label: v.label.clone(),
+                ablations: plan
+                    .ablations
+                    .iter()
+                    .zip(&g.ablation)
+                    .filter(|(m, _)| m.contains(&i))
+                    .map(|(_, a)| a.name.clone())
+                    .collect(),
+                seeds: mine.len(),
+                finished: mine.iter().filter(|r| r.state == "done").count(),
+                with_data: data.len(),
+                final_success: mean_std(&fs),
+                transitions: mean_or_zero(data.iter().map(|r| r.transitions as f64)),
+                wall_s: mean_or_zero(data.iter().map(|r| r.wall_s)),
+                eval_success: mean_std(&es),
+            }
+        })
+        .collect();
+    Ok((
+        GridSummary {
+            grid: g.name.clone(),
+            variants,
+            runs,
+            plots: Vec::new(),
+        },
+        curves,
+    ))
+}
+
+/// Mean of `v`, 0 when empty.
+fn mean_or_zero(v: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as f64
+    }
+}
+
+fn pct(v: Option<(f64, f64)>) -> String {
+    v.map_or_else(
+        || "-".into(),
+        |(m, s)| format!("{:.1} ± {:.1}", 100.0 * m, 100.0 * s),
+    )
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or_else(String::new, |x| format!("{x:.4}"))
+}
+
+/// The per-variant table as Markdown.
+pub fn markdown(plan: &Plan, s: &GridSummary) -> String {
+    let eval = plan
+        .grid
+        .eval
+        .as_ref()
+        .filter(|e| e.trials > 0)
+        .map(|e| format!("{} success % ({} trials/object)", e.objects, e.trials));
+    let mut out = format!(
+        "# Experiment grid `{}`\n\nSeeds: {:?}. Final training success: mean of the last {} \
+         updates' success rates, mean ± sample std across seeds (%).\n\n| variant | setting | \
+         runs done | final training success % | transitions | wall time per run (s) |",
+        s.grid, plan.grid.seeds, plan.grid.final_window
+    );
+    if let Some(e) = &eval {
+        out.push_str(&format!(" {e} |"));
+    }
+    out.push_str("\n|---|---|---|---|---|---|");
+    if eval.is_some() {
+        out.push_str("---|");
+    }
+    out.push('\n');
+    for v in &s.variants {
+        let (transitions, wall) = if v.with_data == 0 {
+            ("-".to_string(), "-".to_string())
+        } else {
+            (format!("{:.0}", v.transitions), format!("{:.1}", v.wall_s))
+        };
+        out.push_str(&format!(
+            "| {} | {} | {}/{} | {} | {transitions} | {wall} |",
+            v.variant,
+            v.label,
+            v.finished,
+            v.seeds,
+            pct(v.final_success),
+        ));
+        if eval.is_some() {
+            out.push_str(&format!(" {} |", pct(v.eval_success)));
+        }
+        out.push('\n');
+    }
+    for (a, members) in plan.grid.ablation.iter().zip(&plan.ablations) {
+        out.push_str(&format!(
+            "\n## {}\n\n![{}]({}.svg)\n\nVariants: {}\n",
+            a.title.as_deref().unwrap_or(&a.name),
+            a.name,
+            a.name,
+            members
+                .iter()
+                .map(|&i| plan.variants[i].label.clone())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    out
+}
+
+/// Writes `summary.md`, `summary.csv`, `runs.csv` and one SVG per ablation into the
+/// plan's output folder; returns the summary with the plots' paths.
+pub fn write_reports(plan: &Plan) -> Result<GridSummary, ExperimentError> {
+    let (mut s, curves) = summarize(plan)?;
+    std::fs::create_dir_all(&plan.out).map_err(|e| io_err(&plan.out, e))?;
+    for (a, members) in plan.grid.ablation.iter().zip(&plan.ablations) {
+        let bands: Vec<_> = members
+            .iter()
+            .filter_map(|&i| aggregate(&plan.variants[i].label, &curves[i], plan.grid.band))
+            .collect();
+        let p = plan.out.join(format!("{}.svg", a.name));
+        let title = a.title.clone().unwrap_or_else(|| a.name.clone());
+        write_band_plot(&p, &title, "success rate", &bands).map_err(|e| io_err(&p, e))?;
+        s.plots.push(p);
+    }
+    let write = |name: &str, text: String| {
+        let p = plan.out.join(name);
+        write_atomic(&p, text.as_bytes()).map_err(|e| io_err(&p, e))
+    };
+    write("summary.md", markdown(plan, &s))?;
+    let mut csv = String::from(
+        "variant,label,ablations,seeds,finished,final_success_mean,final_success_std,\
+         transitions_mean,wall_s_mean,eval_success_mean,eval_success_std\n",
+    );
+    for v in &s.variants {
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{:.0},{:.2},{},{}\n",
+            v.variant,
+            v.label,
+            v.ablations.join(";"),
+            v.seeds,
+            v.finished,
+            opt(v.final_success.map(|x| x.0)),
+            opt(v.final_success.map(|x| x.1)),
+            v.transitions,
+            v.wall_s,
+            opt(v.eval_success.map(|x| x.0)),
+            opt(v.eval_success.map(|x| x.1)),
+        ));
+    }
+    write("summary.csv", csv)?;
+    let mut runs =
+        String::from("variant,seed,state,transitions,wall_s,final_success,eval_success\n");
+    for r in &s.runs {
+        runs.push_str(&format!(
+            "{},{},{},{},{:.2},{},{}\n",
+            r.variant,
+            r.seed,
+            r.state,
+            r.transitions,
+            r.wall_s,
+            opt(r.final_success),
+            opt(r.eval_success)
+        ));
+    }
+    write("runs.csv", runs)?;
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid_text(extra: &str) -> String {
+        format!(
+            "name = \"g\"\nseeds = [1, 2]\n{extra}\n[[ablation]]\nname = \"policy\"\n\
+             configs = [\"gru_m3_pca5.toml\", \"mlp_m3_pca5.toml\"]\n\n[[ablation]]\n\
+             name = \"pca\"\nconfigs = [\"gru_m3_pca3.toml\", \"gru_m3_pca5.toml\"]\n"
+        )
+    }
+
+    fn write_grid(dir: &Path, text: &str) -> PathBuf {
+        let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+        for f in [
+            "base.toml",
+            "gru_m3_pca5.toml",
+            "mlp_m3_pca5.toml",
+            "gru_m3_pca3.toml",
+        ] {
+            std::fs::copy(configs.join(f), dir.join(f)).unwrap();
+        }
+        let p = dir.join("grid.toml");
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn plan_dedupes_variants_and_applies_the_budget() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write_grid(
+            dir.path(),
+            &grid_text("[budget]\ntransitions = 640\nminutes = 2.5\n[overrides]\nnum_envs = 4\nnum_minibatches = 2\n"),
+        );
+        let plan = plan(&p, Path::new("out")).unwrap();
+        let names: Vec<&str> = plan.variants.iter().map(|v| v.name.as_str()).collect();
+        assert_eq!(names, ["gru_m3_pca5", "mlp_m3_pca5", "gru_m3_pca3"]);
+        let labels: Vec<&str> = plan.variants.iter().map(|v| v.label.as_str()).collect();
+        assert_eq!(labels, ["GRU-M3PCA5", "MLP-M3PCA5", "GRU-M3PCA3"]);
+        assert_eq!(plan.ablations, vec![vec![0, 1], vec![2, 0]]);
+        assert_eq!(plan.runs.len(), 6);
+        assert_eq!(plan.runs[1].dir, Path::new("out/gru_m3_pca5/seed2"));
+        let c = &plan.variants[0].config;
+        assert_eq!(c.total_timesteps, 640);
+        assert_eq!(c.time_budget_minutes, Some(2.5));
+        assert_eq!(c.num_envs, 4);
+        assert_eq!(c.ppo.num_minibatches, 2);
+    }
+
+    #[test]
+    fn bad_grids_name_the_field() {
+        let dir = tempfile::tempdir().unwrap();
+        for (extra, field) in [
+            ("parallel = 0", "parallel"),
+            ("[budget]\nminutes = -1.0", "budget.minutes"),
+            (
+                "[overrides]\nnum_envs = 3\nnum_minibatches = 2",
+                "num_minibatches",
+            ),
+            (
+                "[eval]\nobjects = \"unseen\"\ntrials = 1\ndifficulty = 2.0",
+                "eval.difficulty",
+            ),
+            ("bogus = 1", "bogus"),
+        ] {
+            let p = write_grid(dir.path(), &grid_text(extra));
+            let e = plan(&p, Path::new("out")).unwrap_err().to_string();
+            assert!(e.contains(field), "{extra}: {e}");
+        }
+        let p = write_grid(dir.path(), "name = \"g\"\nseeds = [1, 1]\nablation = []\n");
+        assert!(plan(&p, Path::new("o"))
+            .unwrap_err()
+            .to_string()
+            .contains("twice"));
+        let p = write_grid(
+            dir.path(),
+            "name = \"g\"\nseeds = [1]\n[[ablation]]\nname = \"a\"\nconfigs = [\"nope.toml\"]\n",
+        );
+        assert!(plan(&p, Path::new("o"))
+            .unwrap_err()
+            .to_string()
+            .contains("nope.toml"));
+    }
+}

@@ -1,0 +1,240 @@
+//! End-to-end checks of `--record` on `grasp rollout` and `grasp eval`, and of `grasp eval`
+//! reading a checkpoint's own setup.
+
+use std::path::Path;
+use std::process::Command;
+
+fn grasp(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .args(args)
+        .output()
+        .expect("run grasp")
+}
+
+fn read_json(p: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+/// The recording JSON files of `dir`, sorted.
+fn recordings(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn check_recording(v: &serde_json::Value) {
+    let hand = v["hand_geometry"].as_array().unwrap().len();
+    assert!(hand > 20);
+    assert_eq!(v["hand_tactile_fingers"].as_array().unwrap().len(), hand);
+    assert!(!v["object_geometry"].as_array().unwrap().is_empty());
+    let frames = v["frames"].as_array().unwrap();
+    assert!(frames.len() > 10, "{}", frames.len());
+    // The frames reach the end of the episode (the last control record, if any).
+    let last_t = frames.last().unwrap()["t"].as_f64().unwrap();
+    if let Some(c) = v["control"].as_array().and_then(|c| c.last()) {
+        let dt = v["dt"].as_f64().unwrap() * v["frame_every"].as_f64().unwrap();
+        assert!(last_t + dt >= c["t"].as_f64().unwrap() - 1e-9);
+    }
+    for f in frames {
+        assert_eq!(f["hand"].as_array().unwrap().len(), hand);
+        assert_eq!(f["object"].as_array().unwrap().len(), 7);
+        assert_eq!(f["tactile"].as_array().unwrap().len(), 5);
+        assert_eq!(f["torque_level"].as_array().unwrap().len(), 20);
+    }
+    // Frames every 4 physics steps from step 1.
+    assert_eq!(frames[0]["physics_step"], 1);
+    assert_eq!(frames[1]["physics_step"], 5);
+    assert_eq!(frames[0]["stage"], "closing");
+}
+
+#[test]
+fn rollout_records_json_html_and_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    let out = grasp(&[
+        "--json",
+        "rollout",
+        "--policy",
+        "random",
+        "--objects",
+        "box_sugar",
+        "--episodes",
+        "2",
+        "--record",
+        rec.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["episodes"].as_array().unwrap().len(), 2);
+    let files = recordings(&rec);
+    assert_eq!(files.len(), 2);
+    for (i, f) in files.iter().enumerate() {
+        let v = read_json(f);
+        check_recording(&v);
+        assert_eq!(v["agent"], "random");
+        // The recorded outcome is the printed one.
+        assert_eq!(
+            v["summary"]["success"],
+            summary["episodes"][i]["result"]["success"]
+        );
+        let steps = summary["episodes"][i]["result"]["steps"].as_u64().unwrap();
+        assert_eq!(v["control"].as_array().unwrap().len() as u64, steps + 1);
+        let html = std::fs::read_to_string(f.with_extension("html")).unwrap();
+        assert!(html.contains("WebGLRenderer") && html.contains("\"frames\""));
+    }
+    let index = std::fs::read_to_string(rec.join("index.html")).unwrap();
+    assert!(index.contains("random_box_sugar_000.html"));
+    assert!(index.contains("random_box_sugar_001.html"));
+}
+
+#[test]
+fn eval_records_the_same_outcomes_as_without() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    let args = [
+        "--json",
+        "eval",
+        "--policy",
+        "baseline2",
+        "--objects",
+        "can_soup",
+        "--trials",
+        "1",
+    ];
+    let plain = grasp(&args);
+    assert!(plain.status.success());
+    let mut with = args.to_vec();
+    with.extend(["--record", rec.to_str().unwrap(), "--record-every", "8"]);
+    let recorded = grasp(&with);
+    assert!(
+        recorded.status.success(),
+        "{}",
+        String::from_utf8_lossy(&recorded.stderr)
+    );
+    let a: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
+    let b: serde_json::Value = serde_json::from_slice(&recorded.stdout).unwrap();
+    assert_eq!(a[0]["objects"], b[0]["objects"]);
+    assert_eq!(b[0]["recordings"].as_array().unwrap().len(), 1);
+    let files = recordings(&rec);
+    assert_eq!(files.len(), 1);
+    let v = read_json(&files[0]);
+    assert_eq!(v["frame_every"], 8);
+    assert_eq!(v["agent"], "Baseline 2");
+    assert_eq!(v["frames"][1]["physics_step"], 9);
+    let last = v["frames"].as_array().unwrap().last().unwrap().clone();
+    assert_eq!(last["stage"], "lift");
+}
+
+#[test]
+fn record_every_zero_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = grasp(&[
+        "rollout",
+        "--objects",
+        "box_sugar",
+        "--episodes",
+        "1",
+        "--record",
+        dir.path().to_str().unwrap(),
+        "--record-every",
+        "0",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--record-every"));
+}
+
+#[test]
+fn eval_takes_the_setup_from_the_checkpoint() {
+    let policy = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/policies/quick_gru_m3_pca5"
+    );
+    // No --modality/--components needed: the checkpoint's config.toml says M3, 5.
+    let out = grasp(&[
+        "--json",
+        "eval",
+        "--policy",
+        policy,
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "1",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // A contradicting flag is an error naming the checkpoint's value.
+    for (flag, value, expect) in [
+        ("--modality", "M1", "modality M3"),
+        ("--components", "3", "5 synergy components"),
+    ] {
+        let out = grasp(&[
+            "eval",
+            "--policy",
+            policy,
+            "--objects",
+            "box_sugar",
+            "--trials",
+            "1",
+            flag,
+            value,
+        ]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect) && err.contains("config.toml"), "{err}");
+    }
+    // Agreeing flags are fine.
+    let out = grasp(&[
+        "eval",
+        "--policy",
+        policy,
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "1",
+        "--modality",
+        "M3",
+        "--components",
+        "5",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn eval_reports_a_malformed_checkpoint_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/policies/quick_gru_m3_pca5");
+    for f in ["checkpoint.safetensors", "synergy.json"] {
+        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
+    }
+    std::fs::write(dir.path().join("config.toml"), "name = \"x\"\nbogus = 3\n").unwrap();
+    let out = grasp(&[
+        "eval",
+        "--policy",
+        dir.path().to_str().unwrap(),
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("config.toml") && err.contains("bogus"),
+        "{err}"
+    );
+}
