@@ -354,8 +354,9 @@ mod tests {
         for f in 0..5u8 {
             assert!(fingers.contains(&Some(f)), "finger {f}");
         }
-        // The built-in hand: cylinder phalanges with sphere tips, box palm.
-        for kind in ["cylinder", "sphere", "box"] {
+        // The built-in hand: cylinder phalanges, box palm, and sphere tips simulated as
+        // 0.2 mm capsules (see `HandSim::new`).
+        for kind in ["cylinder", "capsule", "box"] {
             assert!(
                 g.iter()
                     .any(|x| serde_json::to_value(x).unwrap()["kind"] == kind),
