@@ -829,3 +829,103 @@ fn attempt_body<B: HandArm>(
         ..base_out
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Side;
+
+    #[test]
+    fn snap_top_down_hand_computed() {
+        // Approach tilted by atan(0.1) ~ 0.0997 rad: kept, made exactly vertical; the
+        // closing direction (3, 4, 1) loses its vertical part -> (0.6, 0.8, 0).
+        let g = TwoFingerGrasp {
+            center: Point3::new(0.1, 0.2, 0.3),
+            approach: Vector3::new(0.1, 0.0, -1.0),
+            closing: Vector3::new(3.0, 4.0, 1.0),
+        };
+        let s = snap_top_down(&g, 0.1).unwrap();
+        assert_eq!(s.approach, -Vector3::z());
+        assert!((s.closing - Vector3::new(0.6, 0.8, 0.0)).norm() < 1e-12);
+        assert_eq!(s.center, g.center);
+        assert!(snap_top_down(&g, 0.09).is_none());
+        let vertical = TwoFingerGrasp {
+            closing: Vector3::z(),
+            ..g
+        };
+        assert!(snap_top_down(&vertical, 0.2).is_none());
+    }
+
+    #[test]
+    fn arm_base_pose_hand_computed() {
+        let b = ArmBase {
+            xyz: [1.0, 2.0, 0.5],
+            yaw: std::f64::consts::FRAC_PI_2,
+        };
+        // Base x axis -> world y; the base origin sits at xyz.
+        let p = b.pose() * Point3::new(1.0, 0.0, 0.0);
+        assert!((p - Point3::new(1.0, 3.0, 0.5)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn planning_reaches_a_top_down_grasp_and_refuses_an_unreachable_one() {
+        let robot = Robot::builtin(Side::Left);
+        let cfg = PipelineConfig::default();
+        let pre = cfg.preshape_angles(&EnvConfig::default()).unwrap();
+        let g = TwoFingerGrasp::top_down(Point3::new(0.0, 0.0, 0.05), 0.0);
+        let plan = plan_grasp(&robot, &GraspSource::Given(g), &pre, &cfg).unwrap();
+        // The pre-grasp flange is 10 cm above the grasp flange (approach straight down).
+        let base = cfg.arm_base.pose();
+        let f_pre = base * ur10e::fk(&plan.pregrasp_q);
+        let f_grasp = base * ur10e::fk(&plan.grasp_q);
+        let d = f_pre.translation.vector - f_grasp.translation.vector;
+        assert!((d - Vector3::new(0.0, 0.0, 0.10)).norm() < 1e-6, "{d}");
+        // The grasp flange realises the grasp: the TH/LF tip midpoint at the centre.
+        let root = root_pose_for(&robot, &pre, &g).unwrap();
+        assert!((f_grasp.translation.vector - root.translation.vector).norm() < 1e-6);
+        let far = TwoFingerGrasp::top_down(Point3::new(3.0, 0.0, 0.05), 0.0);
+        let e = plan_grasp(&robot, &GraspSource::Given(far), &pre, &cfg).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                RunError::Ik {
+                    stage: "pre-grasp",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(e.to_string().contains("(3.000, 0.000, 0.050)"), "{e}");
+    }
+
+    #[test]
+    fn config_and_grasp_file_errors_name_the_field() {
+        let bad = PipelineConfig {
+            preshape: "fist".into(),
+            ..PipelineConfig::default()
+        };
+        assert!(bad.validate().unwrap_err().to_string().contains("preshape"));
+        let bad = PipelineConfig {
+            control_period_s: 0.0,
+            ..PipelineConfig::default()
+        };
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("control_period_s"));
+        let bad = PipelineConfig {
+            torque_thresholds: [0.0, 0.0, 1.0, 2.0, 3.0],
+            ..PipelineConfig::default()
+        };
+        assert!(bad.validate().is_err());
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.toml");
+        std::fs::write(&p, "center = [0, 0, 0.05]\nclosing = [1, 0, \"x\"]\n").unwrap();
+        let e = load_grasp_file(&p).unwrap_err().to_string();
+        assert!(e.contains("g.toml") && e.contains("line 2"), "{e}");
+        std::fs::write(&p, "center = [0, 0, 0.05]\nclosing = [0, 1, 0]\n").unwrap();
+        let g = load_grasp_file(&p).unwrap();
+        assert_eq!(g.approach, -Vector3::z());
+    }
+}

@@ -682,4 +682,42 @@ mod tests {
             .to_string();
         assert!(e.contains("lift.height"), "{e}");
     }
+
+    #[test]
+    fn cameras_see_the_box_surface_from_both_sides() {
+        let a = arm(SimBackendConfig::default());
+        let cam = CameraConfig {
+            noise_sigma: 0.0,
+            ..CameraConfig::default()
+        };
+        let c = a.camera_cloud(&cam, 0).unwrap();
+        assert!(c.len() > 500, "{}", c.len());
+        // Every hit lies on the 5 x 5 x 8 cm box resting at the origin ...
+        let on_face = |p: &Point3<f64>| {
+            let d = [
+                (p.x.abs() - 0.025).abs(),
+                (p.y.abs() - 0.025).abs(),
+                (p.z - 0.04).abs() - 0.04,
+            ];
+            p.x.abs() <= 0.0251
+                && p.y.abs() <= 0.0251
+                && (0.0..=0.0801).contains(&p.z)
+                && (d[0] < 1e-4 || d[1] < 1e-4 || d[2].abs() < 1e-4)
+        };
+        assert!(c.iter().all(on_face));
+        // ... and both the +x and the -x faces are seen, the -y face (hidden) is not.
+        assert!(c.iter().any(|p| p.x > 0.0249) && c.iter().any(|p| p.x < -0.0249));
+        assert!(!c
+            .iter()
+            .any(|p| p.y < -0.0249 && p.z < 0.079 && p.x.abs() < 0.024));
+        assert!(a
+            .camera_cloud(
+                &CameraConfig {
+                    positions: vec![[0.0, 0.0, 0.01]],
+                    ..cam
+                },
+                0
+            )
+            .is_err());
+    }
 }
