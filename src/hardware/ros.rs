@@ -26,7 +26,7 @@
 //! [`HandArm::stop`] commands the hand and the arm to hold their measured positions.
 
 use super::{check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE};
-use crate::robot::joints::{COUPLED_FINGERS, HAND_JOINTS};
+use crate::robot::joints::HAND_JOINTS;
 use crate::robot::ur10e;
 use nalgebra::{Isometry3, Translation3};
 use serde_json::{json, Value};
@@ -109,25 +109,6 @@ fn disconnected(e: impl std::fmt::Display) -> HwError {
 fn duration_json(s: f64) -> Value {
     let secs = s.floor();
     json!({"secs": secs as i64, "nsecs": ((s - secs) * 1e9).round() as i64})
-}
-
-/// The 20 actuator readings from the 24 joint efforts: a coupled finger's J1 and J2
-/// readings are summed into its J0 actuator (paper actuator order).
-pub fn actuator_readings(e: &[f64; N_HAND_JOINTS]) -> [f64; super::N_TENDONS] {
-    let mut out = [0.0; super::N_TENDONS];
-    let (mut i, mut a) = (0, 0);
-    while i < N_HAND_JOINTS && a < super::N_TENDONS {
-        let name = HAND_JOINTS[i];
-        if COUPLED_FINGERS.contains(&&name[..2]) && name.ends_with("J2") {
-            out[a] = e[i] + e[i + 1];
-            i += 2;
-        } else {
-            out[a] = e[i];
-            i += 1;
-        }
-        a += 1;
-    }
-    out
 }
 
 impl RosHandArm {
@@ -366,7 +347,7 @@ impl HandArm for RosHandArm {
                     stamp: self.state.stamp,
                     joint_angles: q,
                     tactile_raw: t,
-                    tendon_raw: actuator_readings(&self.state.hand_effort),
+                    tendon_raw: crate::robot::joints::actuator_sums(&self.state.hand_effort),
                 });
             }
             let waited = self.now() - start;
@@ -456,14 +437,6 @@ impl HandArm for RosHandArm {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn actuator_readings_sum_coupled_pairs() {
-        let e: [f64; 24] = std::array::from_fn(|k| k as f64);
-        let a = actuator_readings(&e);
-        assert_eq!(&a[..5], &[0.0, 1.0, 2.0, 3.0, 9.0]);
-        assert_eq!(a[19], 23.0);
-    }
 
     #[test]
     fn durations_split_into_secs_and_nsecs() {

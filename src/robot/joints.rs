@@ -112,6 +112,26 @@ pub fn actuators() -> Vec<ActuatorSpec> {
     out
 }
 
+/// The 20 actuator values from 24 per-joint values (paper orders, see [`actuators`]): a
+/// coupled finger's J1 and J2 values are summed into its J0 actuator. Used for joint
+/// efforts in the simulator and for tendon readings from the real hand.
+pub fn actuator_sums(e: &[f64; 24]) -> [f64; 20] {
+    let mut out = [0.0; 20];
+    let (mut i, mut a) = (0, 0);
+    while i < HAND_JOINTS.len() && a < out.len() {
+        let name = HAND_JOINTS[i];
+        if COUPLED_FINGERS.contains(&&name[..2]) && name.ends_with("J2") {
+            out[a] = e[i] + e[i + 1];
+            i += 2;
+        } else {
+            out[a] = e[i];
+            i += 1;
+        }
+        a += 1;
+    }
+    out
+}
+
 /// Position of a finger joint name (no prefix) in [`FINGER_JOINTS`].
 pub fn finger_index(name: &str) -> Option<usize> {
     FINGER_JOINTS.iter().position(|j| *j == name)
@@ -419,6 +439,22 @@ pub fn hand_facts(side: Side) -> Vec<JointFact> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn coupled_efforts_are_summed() {
+        let mut e = [0.0; 24];
+        for (k, v) in e.iter_mut().enumerate() {
+            *v = k as f64;
+        }
+        let a = actuator_sums(&e);
+        // WRJ2, WRJ1, FFJ4, FFJ3, FFJ0 = FFJ2 + FFJ1 = 4 + 5.
+        assert_eq!(&a[..5], &[0.0, 1.0, 2.0, 3.0, 9.0]);
+        // LFJ5, LFJ4, LFJ3, LFJ0 = 17 + 18, then the thumb 19..23.
+        assert_eq!(
+            &a[11..],
+            &[14.0, 15.0, 16.0, 35.0, 19.0, 20.0, 21.0, 22.0, 23.0]
+        );
+    }
 
     #[test]
     fn twenty_actuators_with_four_coupled_pairs() {

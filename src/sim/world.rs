@@ -1113,7 +1113,7 @@ impl HandSim {
         let tip_force = self.tip_forces();
         let th = self.cfg.sensors.tactile_threshold;
         let tactile = tip_force.map(|f| u8::from(f > th));
-        let effort = actuator_efforts(&e24);
+        let effort = crate::robot::joints::actuator_sums(&e24);
         let scale = self.cfg.sensors.torque_scale;
         let torque_level =
             effort.map(|e| torque_level(e * scale, &self.cfg.sensors.torque_thresholds));
@@ -1156,25 +1156,6 @@ impl HandSim {
     }
 }
 
-/// Efforts of the 20 actuators from the 24 joint efforts: coupled J0 = J2 + J1.
-pub fn actuator_efforts(e: &[f64; 24]) -> [f64; 20] {
-    let mut out = [0.0; 20];
-    let mut i = 0;
-    let mut a = 0;
-    while i < 24 {
-        let name = HAND_JOINTS[i];
-        if COUPLED_FINGERS.contains(&&name[..2]) && name.ends_with("J2") {
-            out[a] = e[i] + e[i + 1];
-            i += 2;
-        } else {
-            out[a] = e[i];
-            i += 1;
-        }
-        a += 1;
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1185,22 +1166,6 @@ mod tests {
     #[test]
     fn sim_is_send() {
         assert_send::<HandSim>();
-    }
-
-    #[test]
-    fn coupled_efforts_are_summed() {
-        let mut e = [0.0; 24];
-        for (k, v) in e.iter_mut().enumerate() {
-            *v = k as f64;
-        }
-        let a = actuator_efforts(&e);
-        // WRJ2, WRJ1, FFJ4, FFJ3, FFJ0 = FFJ2 + FFJ1 = 4 + 5.
-        assert_eq!(&a[..5], &[0.0, 1.0, 2.0, 3.0, 9.0]);
-        // LFJ5, LFJ4, LFJ3, LFJ0 = 17 + 18, then the thumb 19..23.
-        assert_eq!(
-            &a[11..],
-            &[14.0, 15.0, 16.0, 35.0, 19.0, 20.0, 21.0, 22.0, 23.0]
-        );
     }
 
     #[test]
