@@ -58,13 +58,8 @@ pub struct EvalArgs {
     /// Worker threads (default: available cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Record every episode into this folder: a JSON file and a 3D replay page (HTML,
-    /// opens offline) per episode, and index.html.
-    #[arg(long)]
-    pub record: Option<PathBuf>,
-    /// Physics steps between two recorded frames.
-    #[arg(long, default_value_t = 4)]
-    pub record_every: u64,
+    #[command(flatten)]
+    pub rec: super::RecordArgs,
 }
 
 fn agent_spec(s: &str) -> Result<AgentSpec> {
@@ -162,9 +157,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     if !(0.0..=1.0).contains(&a.difficulty) {
         bail!("--difficulty must be in [0, 1], got {}", a.difficulty);
     }
-    if a.record_every == 0 {
-        bail!("--record-every must be at least 1");
-    }
+    a.rec.check()?;
     let specs = a
         .policy
         .iter()
@@ -178,9 +171,9 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     let objects = sim_objects(&a.objects)?;
     let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
     let agents = agent_envs(&a, specs, g)?;
-    let record = a.record.as_ref().map(|dir| RecordOptions {
+    let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
-        every: a.record_every,
+        every: a.rec.record_every,
     });
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads);

@@ -32,6 +32,28 @@ pub struct Global {
     pub json: bool,
 }
 
+/// `--record DIR` and `--record-every N`, shared by `eval` and `rollout`.
+#[derive(Debug, Clone, Args)]
+pub struct RecordArgs {
+    /// Record every episode into this folder: a JSON file and a 3D replay page (HTML,
+    /// opens offline) per episode, and index.html.
+    #[arg(long)]
+    pub record: Option<std::path::PathBuf>,
+    /// Physics steps between two recorded frames.
+    #[arg(long, default_value_t = 4)]
+    pub record_every: u64,
+}
+
+impl RecordArgs {
+    /// Rejects `--record-every 0`.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if self.record_every == 0 {
+            anyhow::bail!("--record-every must be at least 1");
+        }
+        Ok(())
+    }
+}
+
 /// Teach a Shadow hand on a UR10e arm to grasp unseen objects: hand synergies, a Rapier
 /// simulation with tactile and torque sensing, PPO with a GRU policy, evaluation, and
 /// execution on a real robot.

@@ -46,13 +46,8 @@ pub struct RolloutArgs {
     /// Worker threads (default: available cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Record every episode into this folder: a JSON file and a 3D replay page (HTML,
-    /// opens offline) per episode, and index.html.
-    #[arg(long)]
-    pub record: Option<PathBuf>,
-    /// Physics steps between two recorded frames.
-    #[arg(long, default_value_t = 4)]
-    pub record_every: u64,
+    #[command(flatten)]
+    pub rec: super::RecordArgs,
 }
 
 /// Loads the synergy model (shipped one by default) with `n` components.
@@ -100,9 +95,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     if a.episodes == 0 {
         bail!("--episodes must be at least 1");
     }
-    if a.record_every == 0 {
-        bail!("--record-every must be at least 1");
-    }
+    a.rec.check()?;
     if !(0.0..=1.0).contains(&a.difficulty) {
         bail!("--difficulty must be in [0, 1], got {}", a.difficulty);
     }
@@ -149,21 +142,21 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
                 idx.iter()
                     .map(|&i| {
                         let s = grasp::env::api::episode_seed(seed, 0, i as u64);
-                        if let Some(dir) = &a.record {
+                        if let Some(dir) = &a.rec.record {
                             let rec = match kind {
                                 0 => record_agent_episode(
                                     &mut env,
                                     &mut RandomAgent::new(n, 0.15, s),
                                     &a.policy,
                                     s,
-                                    a.record_every,
+                                    a.rec.record_every,
                                 ),
                                 k => record_baseline_episode(
                                     &mut env,
                                     k == 2,
                                     &a.policy,
                                     s,
-                                    a.record_every,
+                                    a.rec.record_every,
                                 )?,
                             };
                             let entry = write_recording(dir, &rec, i).with_context(|| {
@@ -184,7 +177,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     let wall = start.elapsed().as_secs_f64();
     let mut done: Vec<Done> = results.into_iter().flatten().collect();
     done.sort_by_key(|d| d.0);
-    if let Some(dir) = &a.record {
+    if let Some(dir) = &a.rec.record {
         let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
         let index = write_index(dir, &entries)
             .with_context(|| format!("writing the index of {}", dir.display()))?;
