@@ -298,6 +298,15 @@ mod tests {
             ..Default::default()
         };
         assert!(c.validate().unwrap_err().to_string().contains("'dt'"));
+        let c = SimConfig {
+            ccd_substeps: 17,
+            ..Default::default()
+        };
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("ccd_substeps"));
         let mut c = SimConfig::default();
         c.motors.thumb.kp = f64::NAN;
         assert!(c
