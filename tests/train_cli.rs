@@ -289,6 +289,9 @@ fn config_errors_name_key_line_and_files() {
     assert!(String::from_utf8_lossy(&e.stderr).contains("absent.toml"));
     let e = grasp(&["train", "--config", s(&cfg), "--num-envs", "0"]);
     assert!(String::from_utf8_lossy(&e.stderr).contains("num_envs"));
+    let e = grasp(&["train", "--config", s(&cfg), "--time-budget-minutes", "nan"]);
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("time_budget_minutes"));
 }
 
 #[test]
