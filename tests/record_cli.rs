@@ -238,3 +238,51 @@ fn eval_reports_a_malformed_checkpoint_config() {
         "{err}"
     );
 }
+
+#[test]
+fn stochastic_eval_samples_reproducibly() {
+    let policy = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/policies/quick_gru_m3_pca5"
+    );
+    let run = || {
+        let out = grasp(&[
+            "--json",
+            "eval",
+            "--policy",
+            policy,
+            "--stochastic",
+            "--objects",
+            "box_sugar,can_soup",
+            "--trials",
+            "2",
+            "--seed",
+            "5",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).expect("JSON")
+    };
+    let (a, b) = (run(), run());
+    let text = a.to_string();
+    assert!(text.contains("(sampled)"), "{text}");
+    let outcomes = |v: &serde_json::Value| -> Vec<(String, u64, f64)> {
+        v[0]["objects"]
+            .as_array()
+            .expect("objects")
+            .iter()
+            .map(|o| {
+                (
+                    o["object"].as_str().unwrap().to_string(),
+                    o["successes"].as_u64().unwrap(),
+                    o["mean_steps"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    assert_eq!(outcomes(&a).len(), 2);
+    assert_eq!(outcomes(&a), outcomes(&b));
+}

@@ -31,6 +31,11 @@ pub struct EvalArgs {
     /// Trials per object.
     #[arg(long, default_value_t = 10)]
     pub trials: usize,
+    /// Checkpoints act with actions sampled from their distribution, as in training
+    /// (seeded by --seed), instead of its mode. A policy whose lift probability stays
+    /// below 0.5 never lifts with the mode: its episodes are truncated as failures.
+    #[arg(long)]
+    pub stochastic: bool,
     /// Print a Markdown table.
     #[arg(long)]
     pub markdown: bool,
@@ -104,7 +109,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
     specs
         .into_iter()
         .map(|spec| {
-            let AgentSpec::Checkpoint(dir) = &spec else {
+            let Some(dir) = spec.checkpoint() else {
                 return Ok(AgentEnv {
                     spec,
                     env: flag_env.clone(),
@@ -161,7 +166,12 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     let specs = a
         .policy
         .iter()
-        .map(|s| agent_spec(s))
+        .map(|s| {
+            agent_spec(s).map(|spec| match spec {
+                AgentSpec::Checkpoint(p) if a.stochastic => AgentSpec::Sampled(p),
+                other => other,
+            })
+        })
         .collect::<Result<Vec<_>>>()?;
     let robot = Robot::builtin(Side::Left);
     let sim_cfg = match &a.sim_config {
@@ -189,7 +199,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
             )
         };
         // A checkpoint must match the observation layout it will see.
-        if let AgentSpec::Checkpoint(dir) = &ag.spec {
+        if let Some(dir) = ag.spec.checkpoint() {
             let probe = make_env(0)?;
             let p = grasp::ppo::load_policy(dir)
                 .with_context(|| format!("loading checkpoint {}", dir.display()))?;

@@ -122,8 +122,11 @@ pub enum AgentSpec {
     Baseline1,
     /// Scripted baseline 2 (FF, MF, RF stop at contact).
     Baseline2,
-    /// A checkpoint folder of a trained policy.
+    /// A checkpoint folder of a trained policy, acting with its distribution's mode.
     Checkpoint(std::path::PathBuf),
+    /// A checkpoint folder of a trained policy, acting with actions sampled from its
+    /// distribution as in training (seeded per object, so runs are reproducible).
+    Sampled(std::path::PathBuf),
 }
 
 impl AgentSpec {
@@ -133,6 +136,15 @@ impl AgentSpec {
             AgentSpec::Baseline1 => "Baseline 1".into(),
             AgentSpec::Baseline2 => "Baseline 2".into(),
             AgentSpec::Checkpoint(p) => p.display().to_string(),
+            AgentSpec::Sampled(p) => format!("{} (sampled)", p.display()),
+        }
+    }
+
+    /// The checkpoint folder of a learned agent.
+    pub fn checkpoint(&self) -> Option<&Path> {
+        match self {
+            AgentSpec::Checkpoint(p) | AgentSpec::Sampled(p) => Some(p),
+            AgentSpec::Baseline1 | AgentSpec::Baseline2 => None,
         }
     }
 }
@@ -209,14 +221,15 @@ pub fn evaluate(
             .into_par_iter()
             .map(|o| -> Result<Vec<Trial>, EvalError> {
                 let mut env = make_env(o)?;
-                let mut agent: Option<PolicyAgent> = match spec {
-                    AgentSpec::Checkpoint(dir) => Some(PolicyAgent::new(
+                let mut agent: Option<PolicyAgent> = match spec.checkpoint() {
+                    Some(dir) => Some(PolicyAgent::new(
                         crate::ppo::load_policy(dir)
                             .map_err(|e| EvalError::Agent(format!("{}: {e}", dir.display())))?,
-                        false,
-                        seed,
+                        matches!(spec, AgentSpec::Sampled(_)),
+                        // A stream of its own per object, apart from every trial's seed.
+                        trial_seed(seed, o, trials),
                     )),
-                    _ => None,
+                    None => None,
                 };
                 (0..trials)
                     .map(|t| {
@@ -224,7 +237,7 @@ pub fn evaluate(
                         let baseline = match spec {
                             AgentSpec::Baseline1 => Some(false),
                             AgentSpec::Baseline2 => Some(true),
-                            AgentSpec::Checkpoint(_) => None,
+                            AgentSpec::Checkpoint(_) | AgentSpec::Sampled(_) => None,
                         };
                         if let Some(r) = record {
                             let rec = match (baseline, agent.as_mut()) {

@@ -30,6 +30,7 @@
 pub mod decomp;
 pub mod mesh;
 pub mod procedural;
+pub mod rest;
 pub mod sets;
 pub mod spec;
 

@@ -210,6 +210,9 @@ pub fn prepare(rs: &ResolvedSpec) -> Result<Prepared, ObjectError> {
         }
     };
     mesh.check_size(&label)?;
+    if primitive.is_none() {
+        turn_to_rest(&mut mesh, parts.as_mut());
+    }
     let bb = mesh.aabb().ok_or_else(|| ObjectError::EmptyMesh {
         path: label.clone(),
     })?;
@@ -256,6 +259,28 @@ pub fn prepare(rs: &ResolvedSpec) -> Result<Prepared, ObjectError> {
         volume_m3: props.volume,
         com: props.centroid,
     })
+}
+
+/// Turns a mesh (and its convex parts) onto a stable rest face (see [`super::rest`]).
+fn turn_to_rest(mesh: &mut TriMesh, parts: Option<&mut Vec<ConvexHull>>) {
+    let points: Vec<[f64; 3]> = match &parts {
+        Some(ps) => ps.iter().flat_map(|h| h.points.iter().copied()).collect(),
+        None => mesh.vertices.clone(),
+    };
+    let Some(hull) = convex_hull_mesh(&points) else {
+        return;
+    };
+    let Some(r) = super::rest::rest_rotation(&hull, mesh.mass_properties().centroid) else {
+        return;
+    };
+    let turn = |p: &mut [f64; 3]| {
+        let q = r * nalgebra::Vector3::from(*p);
+        *p = [q.x, q.y, q.z];
+    };
+    mesh.vertices.iter_mut().for_each(turn);
+    for h in parts.into_iter().flatten() {
+        h.points.iter_mut().for_each(turn);
+    }
 }
 
 fn diag(d: [f64; 3]) -> [[f64; 3]; 3] {

@@ -118,6 +118,17 @@ pub struct SimConfig {
     /// Off, the scripted grasps gave identical outcomes 2.5x faster (see configs/sim.toml).
     #[serde(default)]
     pub ccd_substeps: usize,
+    /// rapier's `contact_clustering`: merge the contact points of a compound's many
+    /// manifolds into a few per pair. On (rapier's default), the chosen points change from
+    /// step to step and flat-based convex objects creep across the table (see
+    /// configs/sim.toml).
+    #[serde(default)]
+    pub contact_clustering: bool,
+    /// Angular damping of the object (1/s): a stand-in for rolling resistance, which rapier
+    /// lacks. Without it, rounded objects rock on their facets forever (see
+    /// configs/sim.toml).
+    #[serde(default)]
+    pub object_angular_damping: f64,
     /// Seconds one control action lasts.
     pub control_period: f64,
     /// Gravity along world z (m/s^2, negative: down).
@@ -204,6 +215,14 @@ impl SimConfig {
                 "ccd_substeps",
                 self.ccd_substeps as f64,
                 "must be in 0..=16",
+            ));
+        }
+        nonneg("object_angular_damping", self.object_angular_damping)?;
+        if self.object_angular_damping > 10.0 {
+            return Err(bad(
+                "object_angular_damping",
+                self.object_angular_damping,
+                "must be at most 10 1/s",
             ));
         }
         pos("control_period", self.control_period)?;
@@ -307,6 +326,14 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("ccd_substeps"));
+        for bad_damping in [-0.1, f64::NAN, 11.0] {
+            let c = SimConfig {
+                object_angular_damping: bad_damping,
+                ..Default::default()
+            };
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("object_angular_damping"), "{e}");
+        }
         let mut c = SimConfig::default();
         c.motors.thumb.kp = f64::NAN;
         assert!(c

@@ -579,6 +579,7 @@ impl HandSim {
         };
         params.num_solver_iterations = cfg.substeps;
         params.max_ccd_substeps = cfg.ccd_substeps;
+        params.contact_clustering = cfg.contact_clustering;
         let mut sim = HandSim {
             cfg,
             template: sets.clone(),
@@ -632,6 +633,7 @@ impl HandSim {
         let body = t.bodies.insert(
             RigidBodyBuilder::dynamic()
                 .can_sleep(false)
+                .angular_damping(self.cfg.object_angular_damping as f32)
                 .additional_mass_properties(object.mass_properties())
                 .translation(Vector::new(0.0, 0.0, object.rest_height() as f32)),
         );
