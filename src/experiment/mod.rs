@@ -16,6 +16,7 @@
 //! [eval]                       # optional: evaluate each run's latest checkpoint
 //! objects = "unseen"
 //! trials = 3
+//! stochastic = false           # true: sampled actions, as in training
 //! [[ablation]]
 //! name = "modality"
 //! title = "Modalities (Fig. 5a)"
@@ -94,6 +95,10 @@ pub struct EvalSettings {
     /// Curriculum level of the start poses (eq. 6), 1 = hardest.
     #[serde(default = "one")]
     pub difficulty: f64,
+    /// Sample the policy's actions (as in training) instead of taking their mode
+    /// (`grasp eval --stochastic`).
+    #[serde(default)]
+    pub stochastic: bool,
 }
 
 fn one() -> f64 {
@@ -806,7 +811,11 @@ pub fn evaluate_runs(
             seed,
             threads,
             &make_env,
-            &AgentSpec::Checkpoint(ck.clone()),
+            &if e.stochastic {
+                AgentSpec::Sampled(ck.clone())
+            } else {
+                AgentSpec::Checkpoint(ck.clone())
+            },
             None,
         )
         .map_err(eval_err)?;
