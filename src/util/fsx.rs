@@ -30,6 +30,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     std::fs::create_dir_all(&dir).map_err(wrap)?;
     let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(wrap)?;
     tmp.write_all(bytes).map_err(wrap)?;
+    // The temporary file is private (0600); the result is an ordinary file that others
+    // may read, like one written by `std::fs::write` under the usual umask.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(wrap)?;
+    }
     tmp.as_file().sync_all().map_err(wrap)?;
     tmp.persist(path).map_err(|e| wrap(e.error))?;
     Ok(())
@@ -48,5 +57,11 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"second");
         let entries: Vec<_> = std::fs::read_dir(p.parent().unwrap()).unwrap().collect();
         assert_eq!(entries.len(), 1);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+            assert_eq!(mode & 0o777, 0o644);
+        }
     }
 }
