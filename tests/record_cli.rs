@@ -4,6 +4,12 @@
 use std::path::Path;
 use std::process::Command;
 
+/// The policy shipped in assets/ (a checkpoint folder).
+const SHIPPED_POLICY: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/assets/policies/quick_gru_m3_pca5"
+);
+
 fn grasp(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_grasp"))
         .args(args)
@@ -153,10 +159,7 @@ fn record_every_zero_is_refused() {
 
 #[test]
 fn eval_takes_the_setup_from_the_checkpoint() {
-    let policy = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/assets/policies/quick_gru_m3_pca5"
-    );
+    let policy = SHIPPED_POLICY;
     // No --modality/--components needed: the checkpoint's config.toml says M3, 5.
     let out = grasp(&[
         "--json",
@@ -217,7 +220,7 @@ fn eval_takes_the_setup_from_the_checkpoint() {
 #[test]
 fn eval_reports_a_malformed_checkpoint_config() {
     let dir = tempfile::tempdir().unwrap();
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/policies/quick_gru_m3_pca5");
+    let src = Path::new(SHIPPED_POLICY);
     for f in ["checkpoint.safetensors", "synergy.json"] {
         std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
     }
@@ -241,10 +244,7 @@ fn eval_reports_a_malformed_checkpoint_config() {
 
 #[test]
 fn stochastic_eval_samples_reproducibly() {
-    let policy = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/assets/policies/quick_gru_m3_pca5"
-    );
+    let policy = SHIPPED_POLICY;
     let run = || {
         let out = grasp(&[
             "--json",

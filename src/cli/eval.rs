@@ -67,7 +67,8 @@ pub struct EvalArgs {
     pub rec: super::RecordArgs,
 }
 
-fn agent_spec(s: &str) -> Result<AgentSpec> {
+/// The agent named by one `--policy` value; checkpoints act by sampling when `stochastic`.
+fn agent_spec(s: &str, stochastic: bool) -> Result<AgentSpec> {
     Ok(match s {
         "baseline1" => AgentSpec::Baseline1,
         "baseline2" => AgentSpec::Baseline2,
@@ -79,7 +80,7 @@ fn agent_spec(s: &str) -> Result<AgentSpec> {
                     grasp::ppo::CHECKPOINT_FILE
                 );
             }
-            AgentSpec::Checkpoint(p)
+            AgentSpec::learned(p, stochastic)
         }
     })
 }
@@ -166,12 +167,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     let specs = a
         .policy
         .iter()
-        .map(|s| {
-            agent_spec(s).map(|spec| match spec {
-                AgentSpec::Checkpoint(p) if a.stochastic => AgentSpec::Sampled(p),
-                other => other,
-            })
-        })
+        .map(|s| agent_spec(s, a.stochastic))
         .collect::<Result<Vec<_>>>()?;
     let robot = Robot::builtin(Side::Left);
     let sim_cfg = match &a.sim_config {

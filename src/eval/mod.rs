@@ -140,6 +140,16 @@ impl AgentSpec {
         }
     }
 
+    /// A checkpoint's agent: [`AgentSpec::Sampled`] when `stochastic`, else
+    /// [`AgentSpec::Checkpoint`].
+    pub fn learned(dir: std::path::PathBuf, stochastic: bool) -> AgentSpec {
+        if stochastic {
+            AgentSpec::Sampled(dir)
+        } else {
+            AgentSpec::Checkpoint(dir)
+        }
+    }
+
     /// The checkpoint folder of a learned agent.
     pub fn checkpoint(&self) -> Option<&Path> {
         match self {

@@ -811,11 +811,7 @@ pub fn evaluate_runs(
             seed,
             threads,
             &make_env,
-            &if e.stochastic {
-                AgentSpec::Sampled(ck.clone())
-            } else {
-                AgentSpec::Checkpoint(ck.clone())
-            },
+            &AgentSpec::learned(ck.clone(), e.stochastic),
             None,
         )
         .map_err(eval_err)?;

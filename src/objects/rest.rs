@@ -118,9 +118,11 @@ pub fn rest_faces(hull: &super::TriMesh, com: [f64; 3]) -> Vec<RestFace> {
 pub fn rest_rotation(hull: &super::TriMesh, com: [f64; 3]) -> Option<Rotation3<f64>> {
     let faces = rest_faces(hull, com);
     let down = Vector3::new(0.0, 0.0, -1.0);
+    // The face the object stands on as made (normal straight down).
+    let is_bottom = |f: &RestFace| Vector3::from(f.normal).dot(&down) > 1.0 - 1e-6;
     let own = faces
         .iter()
-        .find(|f| Vector3::from(f.normal).dot(&down) > 1.0 - 1e-6)
+        .find(|f| is_bottom(f))
         .map_or(f64::NEG_INFINITY, |f| f.tipping_angle);
     if own >= KEEP_TIPPING_ANGLE {
         return None;
@@ -129,7 +131,7 @@ pub fn rest_rotation(hull: &super::TriMesh, com: [f64; 3]) -> Option<Rotation3<f
         .iter()
         .filter(|f| f.tipping_angle > 0.0)
         .min_by(|a, b| a.com_height.total_cmp(&b.com_height))?;
-    if own > 0.0 && Vector3::from(lowest.normal).dot(&down) > 1.0 - 1e-6 {
+    if own > 0.0 && is_bottom(lowest) {
         return None;
     }
     let n = Vector3::from(lowest.normal);
