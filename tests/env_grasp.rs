@@ -2,26 +2,23 @@
 
 mod common;
 
-use grasp::env::api::Env;
+use grasp::env::api::{Action, Env};
 use grasp::env::grasp::{run_episode, EnvConfig, GraspEnv, RandomAgent};
 use grasp::robot::{Robot, Side};
 use grasp::sim::{ObjectSpec, SimConfig};
 
 fn env() -> GraspEnv {
+    env_with(EnvConfig::default())
+}
+
+fn env_with(cfg: EnvConfig) -> GraspEnv {
     let robot = Robot::builtin(Side::Left);
     let model = common::test_model();
     let objects = vec![
         ("box".to_string(), ObjectSpec::default_box()),
         ("cylinder".to_string(), ObjectSpec::default_cylinder()),
     ];
-    GraspEnv::new(
-        &robot,
-        objects,
-        model,
-        SimConfig::default(),
-        EnvConfig::default(),
-    )
-    .expect("env")
+    GraspEnv::new(&robot, objects, model, SimConfig::default(), cfg).expect("env")
 }
 
 #[test]
@@ -55,4 +52,32 @@ fn observations_follow_the_layout_and_episodes_are_deterministic() {
     let a = run(&mut e);
     let b = run(&mut e);
     assert_eq!(a, b);
+}
+
+#[test]
+fn an_episode_that_never_lifts_ends_as_a_terminal_failure() {
+    let mut e = env_with(EnvConfig {
+        max_steps: 3,
+        ..EnvConfig::default()
+    });
+    e.reset(5);
+    // Squeeze: every synergy component pushed to close, no lift.
+    let squeeze = Action {
+        cont: vec![1.0; 7],
+        lift: false,
+    };
+    let steps: Vec<_> = (0..3).map(|_| e.step(&squeeze)).collect();
+    for s in &steps[..2] {
+        assert!(!s.terminated && !s.truncated && s.info.success.is_none());
+    }
+    let last = &steps[2];
+    // Eq. 4's final step: r_b = 0, and terminal (no bootstrapping through a timeout).
+    assert!(last.terminated && !last.truncated, "{last:?}");
+    assert_eq!(last.reward, 0.0);
+    assert_eq!(last.info.success, Some(false));
+    let summary = e.last_episode().expect("finished");
+    assert!(!summary.success && !summary.lifted && !summary.physics_failure);
+    assert_eq!(summary.steps, 3);
+    let earlier: f64 = steps[..2].iter().map(|s| f64::from(s.reward)).sum();
+    assert!((summary.episode_return - earlier).abs() < 1e-6);
 }

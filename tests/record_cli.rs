@@ -286,3 +286,49 @@ fn stochastic_eval_samples_reproducibly() {
     assert_eq!(outcomes(&a).len(), 2);
     assert_eq!(outcomes(&a), outcomes(&b));
 }
+
+#[test]
+fn eval_pairs_the_first_agent_with_the_others() {
+    let args = [
+        "eval",
+        "--policy",
+        "baseline1,baseline2",
+        "--objects",
+        "can_soup,box_sugar",
+        "--trials",
+        "2",
+    ];
+    let json = grasp(&[&["--json"], &args[..]].concat());
+    assert!(
+        json.status.success(),
+        "{}",
+        String::from_utf8_lossy(&json.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON");
+    // Each object lists its trials' outcomes; count the pairs by hand.
+    let outcomes = |a: usize| -> Vec<bool> {
+        v[a]["objects"]
+            .as_array()
+            .expect("objects")
+            .iter()
+            .flat_map(|o| {
+                let t = o["outcomes"].as_array().expect("outcomes");
+                assert_eq!(t.len(), 2);
+                t.iter().map(|x| x.as_bool().unwrap()).collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    let (a, b) = (outcomes(0), outcomes(1));
+    let count = |x: bool, y: bool| a.iter().zip(&b).filter(|p| *p.0 == x && *p.1 == y).count();
+    let md = grasp(&[&args[..], &["--markdown"]].concat());
+    assert!(md.status.success());
+    let text = String::from_utf8_lossy(&md.stdout);
+    let expect = format!(
+        "Baseline 1 vs Baseline 2 on identical start poses: only the first won {} trials, only the second {}, both {}, neither {} (exact McNemar p = ",
+        count(true, false),
+        count(false, true),
+        count(true, true),
+        count(false, false)
+    );
+    assert!(text.contains(&expect), "{text}");
+}

@@ -7,7 +7,10 @@ use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv};
 use grasp::env::obs::Modality;
 use grasp::eval::record::{write_index, RecordOptions};
-use grasp::eval::{checkpoint_setup, csv_table, evaluate, markdown_table, AgentSpec};
+use grasp::eval::{
+    checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
+    AgentSpec,
+};
 use grasp::robot::{Robot, Side};
 use grasp::sim::SimConfig;
 use grasp::util::fsx::write_atomic;
@@ -19,7 +22,7 @@ use super::Global;
 /// Evaluate agents per object on identical initial poses and print a Table-I-style table.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint."
+    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint.\n\nWith several agents, the first is also compared with each other one trial by trial (every\nagent sees the same start poses): the counts of trials only one of them won and the exact\nMcNemar p-value. --json gives each trial's outcome per object."
 )]
 pub struct EvalArgs {
     /// Agents: baseline1, baseline2, or a checkpoint folder; repeat or separate by commas.
@@ -244,10 +247,14 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     if let Some(p) = &a.csv {
         write_atomic(p, csv_table(&results).as_bytes())?;
     }
+    let pairs = paired_lines(&paired_with_first(&results));
     if g.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     } else if a.markdown {
         print!("{}", markdown_table(&results));
+        if !pairs.is_empty() {
+            print!("\n{pairs}");
+        }
     } else {
         for r in &results {
             println!(
@@ -271,6 +278,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
                 );
             }
         }
+        print!("{pairs}");
     }
     Ok(())
 }

@@ -5,11 +5,15 @@
 //! - [`evaluate`]: one agent on every object of a set, trials seeded per (object, trial);
 //! - [`checkpoint_setup`]: the environment a checkpoint was trained in, read from the
 //!   `config.toml` saved beside it, so evaluations observe what the policy expects;
+//! - [`paired`]: two agents compared trial by trial (exact McNemar test);
 //! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
 //! - [`regression`]: the CI regression check against committed reference figures.
 
+pub mod paired;
 pub mod record;
 pub mod regression;
+
+pub use paired::{paired, paired_lines, paired_with_first, Paired};
 
 use crate::env::api::Action;
 use crate::env::grasp::{run_episode, Agent, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError};
@@ -176,6 +180,8 @@ pub struct ObjectResult {
     pub mean_steps: f64,
     /// Episodes that ended in a physics failure.
     pub physics_failures: usize,
+    /// Success of each trial, in trial order (trial `t` is the same scene for every agent).
+    pub outcomes: Vec<bool>,
 }
 
 /// All results of one agent.
@@ -295,6 +301,7 @@ pub fn evaluate(
             ci95: wilson(k, n),
             mean_steps: steps as f64 / n.max(1) as f64,
             physics_failures: eps.iter().filter(|e| e.physics_failure).count(),
+            outcomes: eps.iter().map(|e| e.success).collect(),
         });
         recordings.extend(trials.into_iter().filter_map(|t| t.1));
     }
@@ -517,6 +524,7 @@ mod tests {
                 ci95: wilson(8, 10),
                 mean_steps: 1.0,
                 physics_failures: 0,
+                outcomes: vec![true; 8].into_iter().chain([false; 2]).collect(),
             }],
             mean_rate: 0.8,
             ci95: wilson(8, 10),
