@@ -324,7 +324,7 @@ fn eval_pairs_the_first_agent_with_the_others() {
     assert!(md.status.success());
     let text = String::from_utf8_lossy(&md.stdout);
     let expect = format!(
-        "Baseline 1 vs Baseline 2 on identical start poses: only the first won {} trials, only the second {}, both {}, neither {} (exact McNemar p = ",
+        "Baseline 1 vs Baseline 2 on identical start poses: only the first won {} trials, only the second {}, both {}, neither {} (exact McNemar p",
         count(true, false),
         count(false, true),
         count(true, true),

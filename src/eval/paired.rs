@@ -95,9 +95,14 @@ pub fn paired_with_first(results: &[AgentResult]) -> Vec<Paired> {
 pub fn paired_lines(pairs: &[Paired]) -> String {
     let mut s = String::new();
     for p in pairs {
+        let pv = if p.p_value < 0.001 {
+            "p < 0.001".to_string()
+        } else {
+            format!("p = {:.3}", p.p_value)
+        };
         s.push_str(&format!(
-            "{} vs {} on identical start poses: only the first won {} trials, only the second {}, both {}, neither {} (exact McNemar p = {:.3})\n",
-            p.agent, p.against, p.only_agent, p.only_against, p.both, p.neither, p.p_value
+            "{} vs {} on identical start poses: only the first won {} trials, only the second {}, both {}, neither {} (exact McNemar {pv})\n",
+            p.agent, p.against, p.only_agent, p.only_against, p.both, p.neither
         ));
     }
     s
@@ -176,5 +181,13 @@ mod tests {
         d.objects[1].object = "other".into();
         assert!(paired(&a, &d).is_none());
         assert!(paired_with_first(&[a]).is_empty());
+        // Tiny p-values are printed as a bound.
+        let strong = Paired {
+            only_agent: 20,
+            only_against: 0,
+            p_value: mcnemar_exact(20, 0),
+            ..p
+        };
+        assert!(paired_lines(&[strong]).contains("(exact McNemar p < 0.001)"));
     }
 }
