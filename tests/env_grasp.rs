@@ -61,9 +61,9 @@ fn an_episode_that_never_lifts_ends_as_a_terminal_failure() {
         ..EnvConfig::default()
     });
     e.reset(5);
-    // Squeeze: every synergy component pushed to close, no lift.
+    // Squeeze: every continuous component at its maximum, no lift.
     let squeeze = Action {
-        cont: vec![1.0; 7],
+        cont: vec![1.0; e.action_spec().continuous],
         lift: false,
     };
     let steps: Vec<_> = (0..3).map(|_| e.step(&squeeze)).collect();

@@ -11,10 +11,11 @@
 //! 3. **stage 2**: each [`Env::step`] applies eq. 2 to the finger targets and the wrist
 //!    increments for one control period, or lifts when `rho = 1` and judges the grasp.
 //!    An episode that has not lifted after `max_steps` control steps ends there as a
-//!    failure: its last step is terminal with `r_b = 0` (eq. 4's final step), never a
-//!    truncation to bootstrap through. Bootstrapping it let the value of an endless
-//!    squeeze (0.03 `r_c` per step) stand in for a decision to lift: in two 100-update
-//!    runs the episodes grew from 5 to 13-16 steps while the success rate fell.
+//!    failure: its last step is terminal with `r_b = 0` (eq. 4's final step), not a
+//!    time-limit truncation for PPO to bootstrap through, which would value running out
+//!    of time like continuing to squeeze. (The late-lift drift seen in training came
+//!    mainly from the discount, see `configs/quick.toml`; this change alone did not stop
+//!    it.)
 //!
 //! Rewards follow eq. 4 and 5 ([`super::reward`]); observations [`super::obs`].
 

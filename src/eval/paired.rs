@@ -90,8 +90,9 @@ pub fn paired_with_first(results: &[AgentResult]) -> Vec<Paired> {
     rest.iter().filter_map(|r| paired(first, r)).collect()
 }
 
-/// One line per comparison, e.g. `A vs B: only A won 12 trials, only B 4, both 50,
-/// neither 29 (exact McNemar p = 0.077)`.
+/// One line per comparison, e.g. `A vs B on identical start poses: only the first won 12
+/// trials, only the second 4, both 50, neither 29 (exact McNemar p = 0.077)`; p-values
+/// below 0.001 are printed as `p < 0.001`.
 pub fn paired_lines(pairs: &[Paired]) -> String {
     let mut s = String::new();
     for p in pairs {
