@@ -31,9 +31,10 @@ pub enum BenchCommand {
     /// CI regression check: a fixed-seed evaluation of baseline 2 and the shipped policy
     /// on a few objects plus the environment throughput, printed as JSON and compared
     /// with the committed reference (success counts within ±1 episode per agent,
-    /// throughput at least 0.3x); exits non-zero naming each regressed figure.
+    /// throughput at least 0.3x when measured in the same build profile as the reference:
+    /// .ci/run uses the dev profile); exits non-zero naming each regressed figure.
     #[command(
-        after_help = "Examples:\n  grasp bench regression\n  grasp bench regression --update   # rewrite ci/reference.json after an intended change"
+        after_help = "Examples:\n  cargo run -- bench regression            # as .ci/run does (dev profile)\n  cargo run -- bench regression --update   # rewrite ci/reference.json after an intended change"
     )]
     Regression(BenchRegressionArgs),
 }
@@ -162,6 +163,13 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
         );
     }
     if !g.quiet {
+        if figures.build != reference.figures.build {
+            eprintln!(
+                "throughput not compared: the reference was measured in a {} build, this is \
+                 a {} build",
+                reference.figures.build, figures.build
+            );
+        }
         eprintln!("no regression against {}", a.reference.display());
     }
     Ok(())

@@ -6,7 +6,9 @@
 //! Success counts must stay within [`Reference::tolerance_episodes`] of the reference
 //! (the physics is deterministic for one binary, but CPUs and compilers may round
 //! differently); throughput must stay above [`Reference::min_throughput_ratio`] times the
-//! reference (CI machines differ in speed).
+//! reference (CI machines differ in speed) when both were measured in the same build
+//! profile ([`Figures::build`]): a release build runs the environment several times faster
+//! than the dev profile `.ci/run` uses, so across profiles only the counts are compared.
 
 use super::{evaluate, AgentSpec, EvalError};
 use crate::env::api::{Action, Env, VecEnv};
@@ -51,6 +53,23 @@ pub struct Figures {
     pub throughput_envs: usize,
     /// Threads of the throughput measurement.
     pub throughput_threads: usize,
+    /// The build profile that measured the throughput: [`build_profile`].
+    #[serde(default = "release")]
+    pub build: String,
+}
+
+fn release() -> String {
+    "release".into()
+}
+
+/// `"dev"` when this binary has debug assertions (cargo's dev and test profiles, which
+/// `.ci/run` uses), `"release"` otherwise.
+pub fn build_profile() -> &'static str {
+    if cfg!(debug_assertions) {
+        "dev"
+    } else {
+        "release"
+    }
 }
 
 /// The committed reference (`ci/reference.json`): figures plus tolerances.
@@ -80,7 +99,8 @@ impl Reference {
 }
 
 /// Compares `now` with `reference`; returns one line per regressed figure (empty: pass).
-/// A different setup (objects, trials, seed, agents) is reported as such.
+/// A different setup (objects, trials, seed, agents) is reported as such. The throughput
+/// is compared only when both were measured in the same build profile.
 pub fn compare(now: &Figures, reference: &Reference) -> Vec<String> {
     let r = &reference.figures;
     let mut out = Vec::new();
@@ -111,7 +131,8 @@ pub fn compare(now: &Figures, reference: &Reference) -> Vec<String> {
         }
     }
     let floor = reference.min_throughput_ratio * r.env_steps_per_s;
-    if now.env_steps_per_s.is_nan() || now.env_steps_per_s < floor {
+    let comparable = now.build == r.build;
+    if now.env_steps_per_s.is_nan() || (comparable && now.env_steps_per_s < floor) {
         out.push(format!(
             "env_steps_per_s: {:.1} is below {:.2} x the reference {:.1} = {:.1}",
             now.env_steps_per_s, reference.min_throughput_ratio, r.env_steps_per_s, floor
@@ -214,6 +235,7 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
         env_steps_per_s,
         throughput_envs: setup.throughput_envs,
         throughput_threads: setup.threads,
+        build: build_profile().into(),
     })
 }
 
@@ -287,6 +309,7 @@ mod tests {
             env_steps_per_s: speed,
             throughput_envs: 4,
             throughput_threads: 2,
+            build: "dev".into(),
         }
     }
 
@@ -320,6 +343,23 @@ mod tests {
         let mut missing = figures(3, 2, 100.0);
         missing.agents.pop();
         assert_eq!(compare(&missing, &r), ["agent quick is missing"]);
+    }
+
+    #[test]
+    fn throughput_is_compared_only_within_one_build_profile() {
+        let r = Reference::from_figures(figures(3, 2, 100.0));
+        let mut release = figures(3, 2, 29.0);
+        release.build = "release".into();
+        assert!(compare(&release, &r).is_empty());
+        // The counts are still compared across profiles.
+        release.agents[0].successes = 1;
+        assert_eq!(compare(&release, &r).len(), 1);
+        // A reference written before the profile was recorded was a release one.
+        let text = serde_json::to_string(&r)
+            .unwrap()
+            .replace(",\"build\":\"dev\"", "");
+        let old: Reference = serde_json::from_str(&text).unwrap();
+        assert_eq!(old.figures.build, "release");
     }
 
     #[test]
