@@ -5,7 +5,7 @@
 //! - [`evaluate`]: one agent on every object of a set, trials seeded per (object, trial);
 //! - [`checkpoint_setup`]: the environment a checkpoint was trained in, read from the
 //!   `config.toml` saved beside it, so evaluations observe what the policy expects;
-//! - [`paired`]: two agents compared trial by trial (exact McNemar test);
+//! - [`paired`](mod@paired): two agents compared trial by trial (exact McNemar test);
 //! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
 //! - [`regression`]: the CI regression check against committed reference figures.
 

@@ -2,7 +2,7 @@
 //! hand and of the object, the world poses of the hand's colliders, and a frame recorder
 //! that samples them (with the object pose and the sensors) every few physics steps.
 //!
-//! This file is a child module of [`super::world`] (declared there with `#[path]`), so it
+//! This file is a child module of `sim::world` (declared there with `#[path]`), so it
 //! reads the simulator's private state without widening the visibility of any field.
 //! Nothing here changes the physics: recording an episode gives the same trajectory as not
 //! recording it.
