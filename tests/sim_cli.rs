@@ -1,4 +1,5 @@
-//! End-to-end tests of `grasp sim` and `grasp bench sim`.
+//! End-to-end tests of `grasp sim`, `grasp bench sim` and the reference check of
+//! `grasp bench regression`.
 
 use std::process::Command;
 
@@ -100,4 +101,22 @@ fn bench_sim_reports_throughput() {
     let (ok, _, err) = grasp(&["bench", "sim", "--envs", "0"]);
     assert!(!ok);
     assert!(err.contains("envs"), "{err}");
+}
+
+#[test]
+fn bench_regression_rejects_a_bad_reference_before_measuring() {
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/ci/reference.json")).unwrap();
+    let mut bad: serde_json::Value = serde_json::from_str(&text).unwrap();
+    bad["figures"]["build"] = "debug".into();
+    let path = dir.path().join("reference.json");
+    std::fs::write(&path, bad.to_string()).unwrap();
+    let (ok, _, err) = grasp(&["bench", "regression", "--reference", path.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(err.contains("parsing the reference"), "{err}");
+    assert!(
+        err.contains("unknown variant `debug`, expected `dev` or `release`"),
+        "{err}"
+    );
 }

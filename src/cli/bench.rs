@@ -163,7 +163,7 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
         );
     }
     if !g.quiet {
-        if figures.build != reference.figures.build {
+        if !reference.compares_throughput(&figures) {
             eprintln!(
                 "throughput not compared: the reference was measured in a {} build, this is \
                  a {} build",

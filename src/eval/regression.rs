@@ -54,22 +54,40 @@ pub struct Figures {
     pub throughput_envs: usize,
     /// Threads of the throughput measurement.
     pub throughput_threads: usize,
-    /// The build profile that measured the throughput: [`build_profile`].
-    #[serde(default = "release")]
-    pub build: String,
+    /// The build profile that measured the throughput (a reference written before this
+    /// field existed was measured in release).
+    #[serde(default)]
+    pub build: BuildProfile,
 }
 
-fn release() -> String {
-    "release".into()
+/// The cargo build profile of a measurement, `"dev"` or `"release"` in the JSON.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BuildProfile {
+    /// A binary with debug assertions: cargo's dev and test profiles, which `.ci/run` uses.
+    Dev,
+    /// An optimised binary without debug assertions.
+    #[default]
+    Release,
 }
 
-/// `"dev"` when this binary has debug assertions (cargo's dev and test profiles, which
-/// `.ci/run` uses), `"release"` otherwise.
-pub fn build_profile() -> &'static str {
-    if cfg!(debug_assertions) {
-        "dev"
-    } else {
-        "release"
+impl BuildProfile {
+    /// The profile of this binary.
+    pub fn current() -> Self {
+        if cfg!(debug_assertions) {
+            BuildProfile::Dev
+        } else {
+            BuildProfile::Release
+        }
+    }
+}
+
+impl std::fmt::Display for BuildProfile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BuildProfile::Dev => "dev",
+            BuildProfile::Release => "release",
+        })
     }
 }
 
@@ -88,6 +106,12 @@ pub struct Reference {
 }
 
 impl Reference {
+    /// Whether `now`'s throughput is compared with this reference's: only when both were
+    /// measured in the same build profile.
+    pub fn compares_throughput(&self, now: &Figures) -> bool {
+        now.build == self.figures.build
+    }
+
     /// A reference from `figures` with the default tolerances (±1 episode, 0.3x).
     pub fn from_figures(figures: Figures) -> Self {
         Reference {
@@ -132,8 +156,9 @@ pub fn compare(now: &Figures, reference: &Reference) -> Vec<String> {
         }
     }
     let floor = reference.min_throughput_ratio * r.env_steps_per_s;
-    let comparable = now.build == r.build;
-    if now.env_steps_per_s.is_nan() || (comparable && now.env_steps_per_s < floor) {
+    if now.env_steps_per_s.is_nan()
+        || (reference.compares_throughput(now) && now.env_steps_per_s < floor)
+    {
         out.push(format!(
             "env_steps_per_s: {:.1} is below {:.2} x the reference {:.1} = {:.1}",
             now.env_steps_per_s, reference.min_throughput_ratio, r.env_steps_per_s, floor
@@ -236,7 +261,7 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
         env_steps_per_s,
         throughput_envs: setup.throughput_envs,
         throughput_threads: setup.threads,
-        build: build_profile().into(),
+        build: BuildProfile::current(),
     })
 }
 
@@ -310,7 +335,7 @@ mod tests {
             env_steps_per_s: speed,
             throughput_envs: 4,
             throughput_threads: 2,
-            build: "dev".into(),
+            build: BuildProfile::Dev,
         }
     }
 
@@ -350,7 +375,8 @@ mod tests {
     fn throughput_is_compared_only_within_one_build_profile() {
         let r = Reference::from_figures(figures(3, 2, 100.0));
         let mut release = figures(3, 2, 29.0);
-        release.build = "release".into();
+        release.build = BuildProfile::Release;
+        assert!(!r.compares_throughput(&release));
         assert!(compare(&release, &r).is_empty());
         // The counts are still compared across profiles.
         release.agents[0].successes = 1;
@@ -360,7 +386,15 @@ mod tests {
             .unwrap()
             .replace(",\"build\":\"dev\"", "");
         let old: Reference = serde_json::from_str(&text).unwrap();
-        assert_eq!(old.figures.build, "release");
+        assert_eq!(old.figures.build, BuildProfile::Release);
+        // An unknown profile is an error naming the field's values, not a silent skip.
+        let bad = serde_json::to_string(&r)
+            .unwrap()
+            .replace("\"build\":\"dev\"", "\"build\":\"debug\"");
+        let err = serde_json::from_str::<Reference>(&bad)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("unknown variant `debug`"), "{err}");
     }
 
     #[test]
