@@ -310,7 +310,7 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 11);
+    assert_eq!(n, 12);
     let base = TrainConfig::load(&dir.join("base.toml")).unwrap();
     let mut dflt = TrainConfig::load(&dir.join("gru_m3_pca5.toml")).unwrap();
     assert_eq!(dflt.name, base.name);
