@@ -8,6 +8,8 @@ pub use self::multibody_ik::InverseKinematicsOption;
 pub use self::multibody_joint::MultibodyJoint;
 pub use self::multibody_joint_handle::{MultibodyIndex, MultibodyJointHandle};
 #[cfg(feature = "alloc")]
+pub use self::tree_factor::{MassFactor, TreeLdl};
+#[cfg(feature = "alloc")]
 pub use self::multibody_joint_set::{MultibodyJointSet, MultibodyLinkId};
 #[cfg(feature = "alloc")]
 pub use self::multibody_link::MultibodyLink;
@@ -25,6 +27,8 @@ mod multibody_joint_set;
 mod multibody_link;
 #[cfg(feature = "alloc")]
 mod multibody_workspace;
+#[cfg(feature = "alloc")]
+mod tree_factor;
 
 #[cfg(feature = "alloc")]
 mod multibody_ik;

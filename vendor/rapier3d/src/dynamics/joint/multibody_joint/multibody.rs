@@ -1,5 +1,6 @@
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
 use super::multibody_workspace::MultibodyWorkspace;
+use super::tree_factor::{MassFactor, NO_PARENT, sparse_gemm_tr, sparse_quadform};
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
 use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
@@ -110,7 +111,7 @@ pub struct Multibody {
     //       move dofs from/to a format that matches the augmented mass.
     // TODO: use sparse matrices?
     augmented_mass: DMatrix<Real>,
-    inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    inv_augmented_mass: MassFactor,
     // The indexing sequence for moving all kinematics degrees of
     // freedoms to the end of the generalized coordinates vector.
     augmented_mass_indices: IndexSequence,
@@ -134,6 +135,16 @@ pub struct Multibody {
     coriolis_v: Vec<OMatrix<Real, Dim, Dyn>>,
     coriolis_w: Vec<OMatrix<Real, AngDim, Dyn>>,
     i_coriolis_dt: Jacobian<Real>,
+    /// Tree structure of the DoFs (patch): the parent DoF of each DoF ([`NO_PARENT`] for a
+    /// first DoF of the root), rebuilt with the mass matrix.
+    dof_parent: Vec<usize>,
+    /// The DoFs on which link `i`'s body Jacobian can be non-zero (its own and its
+    /// ancestors'): `link_dofs[link_dofs_start[i]..link_dofs_start[i + 1]]`.
+    link_dofs: Vec<usize>,
+    link_dofs_start: Vec<usize>,
+    /// Whether the links are in topological order, so that the tree-sparse mass-matrix
+    /// products and factorisation apply (else the dense ones are used).
+    tree_ordered: bool,
 }
 impl Default for Multibody {
     fn default() -> Self {
@@ -157,7 +168,7 @@ impl Multibody {
             accelerations: DVector::zeros(0),
             body_jacobians: Vec::new(),
             augmented_mass: DMatrix::zeros(0, 0),
-            inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            inv_augmented_mass: MassFactor::empty(),
             acc_augmented_mass: DMatrix::zeros(0, 0),
             acc_inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
             augmented_mass_indices: IndexSequence::new(),
@@ -167,6 +178,10 @@ impl Multibody {
             coriolis_v: Vec::new(),
             coriolis_w: Vec::new(),
             i_coriolis_dt: Jacobian::zeros(0),
+            dof_parent: Vec::new(),
+            link_dofs: Vec::new(),
+            link_dofs_start: Vec::new(),
+            tree_ordered: false,
             root_is_dynamic: false,
             self_contacts_enabled,
             couplings: Vec::new(),
@@ -362,9 +377,48 @@ impl Multibody {
         self.self_contacts_enabled = enabled;
     }
 
-    /// The inverse augmented mass matrix of this multibody.
-    pub fn inv_augmented_mass(&self) -> &LU<Real, Dyn, Dyn> {
+    /// The inverse augmented mass matrix of this multibody: a tree-sparse `Lᵀ D L` (patch)
+    /// or a dense LU, both with `solve_mut`.
+    pub fn inv_augmented_mass(&self) -> &MassFactor {
         &self.inv_augmented_mass
+    }
+
+    /// Rebuilds the DoF tree (patch): each DoF's parent DoF, each link's Jacobian support,
+    /// and whether the links are in topological order.
+    fn update_dof_tree(&mut self) {
+        let nl = self.links.len();
+        self.dof_parent.clear();
+        self.dof_parent.resize(self.ndofs, NO_PARENT);
+        self.link_dofs.clear();
+        self.link_dofs_start.clear();
+        self.tree_ordered = true;
+        // The last DoF of each link's chain (its own last DoF, or its nearest ancestor's).
+        let mut last = vec![NO_PARENT; nl];
+        for i in 0..nl {
+            let link = &self.links[i];
+            let inherited = if i == 0 {
+                NO_PARENT
+            } else if link.parent_internal_id < i {
+                last[link.parent_internal_id]
+            } else {
+                self.tree_ordered = false;
+                return;
+            };
+            let (a, nd) = (link.assembly_id, link.joint.ndofs());
+            for k in 0..nd {
+                self.dof_parent[a + k] = if k == 0 { inherited } else { a + k - 1 };
+            }
+            last[i] = if nd > 0 { a + nd - 1 } else { inherited };
+        }
+        for &end in &last {
+            self.link_dofs_start.push(self.link_dofs.len());
+            let mut d = end;
+            while d != NO_PARENT {
+                self.link_dofs.push(d);
+                d = self.dof_parent[d];
+            }
+        }
+        self.link_dofs_start.push(self.link_dofs.len());
     }
 
     /// The first link of this multibody.
@@ -820,6 +874,7 @@ impl Multibody {
         if self.ndofs == 0 {
             return; // Nothing to do.
         }
+        self.update_dof_tree();
 
         if self.augmented_mass.ncols() != self.ndofs {
             // TODO: do a resize instead of a full reallocation.
@@ -887,10 +942,26 @@ impl Multibody {
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
-            self.augmented_mass
-                .quadform(1.0, &rb_mass_matrix_wo_gyro, body_jacobian, 1.0);
-            self.acc_augmented_mass
-                .quadform(1.0, &rb_mass_matrix, body_jacobian, 1.0);
+            if self.tree_ordered {
+                let cols = &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]];
+                sparse_quadform(
+                    &mut self.augmented_mass,
+                    &rb_mass_matrix_wo_gyro,
+                    body_jacobian,
+                    cols,
+                );
+                sparse_quadform(
+                    &mut self.acc_augmented_mass,
+                    &rb_mass_matrix,
+                    body_jacobian,
+                    cols,
+                );
+            } else {
+                self.augmented_mass
+                    .quadform(1.0, &rb_mass_matrix_wo_gyro, body_jacobian, 1.0);
+                self.acc_augmented_mass
+                    .quadform(1.0, &rb_mass_matrix, body_jacobian, 1.0);
+            }
 
             /*
              *
@@ -1017,8 +1088,13 @@ impl Multibody {
                 i_coriolis_dt_w.gemm(dt, &mat_to_na(rb_inertia), coriolis_w, 0.0);
             }
 
-            self.acc_augmented_mass
-                .gemm_tr(1.0, rb_j, &self.i_coriolis_dt, 1.0);
+            if self.tree_ordered {
+                let cols = &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]];
+                sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
+            } else {
+                self.acc_augmented_mass
+                    .gemm_tr(1.0, rb_j, &self.i_coriolis_dt, 1.0);
+            }
         }
 
         /*
@@ -1077,10 +1153,15 @@ impl Multibody {
                 .view((0, 0), (effective_dim, effective_dim))
                 .into_owned(),
         );
-        self.inv_augmented_mass = LU::new(
+        // Patch: the tree-sparse factorisation when no DoF is kinematic (the matrix is then
+        // not rearranged) and the links are in topological order.
+        let tree = (self.tree_ordered && effective_dim == self.ndofs)
+            .then_some(self.dof_parent.as_slice());
+        self.inv_augmented_mass = MassFactor::new(
             self.augmented_mass
                 .view((0, 0), (effective_dim, effective_dim))
                 .into_owned(),
+            tree,
         );
     }
 
@@ -1631,8 +1712,19 @@ impl Multibody {
         };
 
         let link = &self.links[link_id];
+        // Patch: the body Jacobian is zero outside the link's ancestor chain.
+        let chain = self.link_chain(link.internal_id);
         let mut out_j = jacobians.rows_mut(*j_id, self.ndofs);
-        self.body_jacobians[link.internal_id].tr_mul_to(force.as_vector(), &mut out_j);
+        match chain {
+            Some(cols) => {
+                out_j.fill(0.0);
+                let bj = &self.body_jacobians[link.internal_id];
+                for &c in cols {
+                    out_j[c] = bj.column(c).dot(force.as_vector());
+                }
+            }
+            None => self.body_jacobians[link.internal_id].tr_mul_to(force.as_vector(), &mut out_j),
+        }
 
         // TODO: Optimize with a copy_nonoverlapping?
         for i in 0..self.ndofs {
@@ -1651,7 +1743,22 @@ impl Multibody {
         let invm_j = jacobians.rows(wj_id, self.ndofs);
         *j_id += self.ndofs * 2;
 
-        (j.dot(&invm_j), j.dot(&self.generalized_velocity()))
+        match chain {
+            Some(cols) => {
+                let v = self.generalized_velocity();
+                cols.iter().fold((0.0, 0.0), |(a, b), &c| {
+                    (a + j[c] * invm_j[c], b + j[c] * v[c])
+                })
+            }
+            None => (j.dot(&invm_j), j.dot(&self.generalized_velocity())),
+        }
+    }
+
+    /// The DoFs on which link `i`'s body Jacobian can be non-zero (patch), when the DoF
+    /// tree is current (it is rebuilt with the mass matrix).
+    fn link_chain(&self, i: usize) -> Option<&[usize]> {
+        (self.tree_ordered && self.link_dofs_start.len() == self.links.len() + 1)
+            .then(|| &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]])
     }
 
     /// Fills `jacobians` with the relative jacobian `J = J2ᵀ·f2 − J1ᵀ·f1` of two links of `self`, then `M⁻¹·J`
