@@ -49,7 +49,10 @@ fn sim_json_has_steps_sensors_and_outcome() {
             .len(),
         20
     );
-    assert_eq!(v["physics_steps"], 600);
+    // The lift of an empty hand ends once the whole hand is above the object (a decided
+    // failure), before the full 600 steps of closing, ramp and hold.
+    let physics = v["physics_steps"].as_u64().unwrap();
+    assert!(physics > 240 && physics < 600, "{physics}");
 }
 
 #[test]

@@ -41,6 +41,38 @@ fn closed_hand_lifts_a_box_and_a_slippery_box_drops() {
 }
 
 #[test]
+fn both_drive_models_hold_a_heavy_box_and_a_decided_lift_ends_early() {
+    use grasp::sim::config::DriveModel;
+    let heavy = ObjectSpec::cuboid([0.025, 0.025, 0.04], 0.5, 0.8);
+    for drive in [DriveModel::Spring, DriveModel::MotorRow] {
+        let cfg = SimConfig {
+            drive,
+            ..SimConfig::default()
+        };
+        let mut sim = HandSim::new(&Robot::builtin(Side::Left), heavy.clone(), cfg).unwrap();
+        sim.reset(&grasp_scene(&heavy)).unwrap();
+        let r = close_and_lift(&mut sim, ScriptOptions::default(), &power_grasp());
+        let lift = r.lift.unwrap();
+        assert!(lift.success, "{drive:?}: {lift:?}");
+    }
+    // The slippery box stays on the table: with stop_when_dropped the lift ends once the
+    // whole hand is above it, with the same outcome as the full lift.
+    let slippery = ObjectSpec::cuboid([0.025, 0.025, 0.04], 0.1, 0.05);
+    let mut outcome = Vec::new();
+    for stop in [true, false] {
+        let mut cfg = SimConfig::default();
+        cfg.lift.stop_when_dropped = stop;
+        let mut sim = HandSim::new(&Robot::builtin(Side::Left), slippery.clone(), cfg).unwrap();
+        sim.reset(&grasp_scene(&slippery)).unwrap();
+        let r = close_and_lift(&mut sim, ScriptOptions::default(), &power_grasp());
+        let lift = r.lift.unwrap();
+        assert!(!lift.success && !lift.in_contact, "{lift:?}");
+        outcome.push(sim.physics_steps());
+    }
+    assert!(outcome[0] < outcome[1], "{outcome:?}");
+}
+
+#[test]
 fn open_hand_never_lifts_the_box() {
     let obj = ObjectSpec::default_box();
     let mut sim = sim_with(&obj);

@@ -301,7 +301,8 @@ fn shipped_configs_load() {
     for e in std::fs::read_dir(&dir).unwrap() {
         let p = e.unwrap().path();
         let name = p.file_name().unwrap().to_string_lossy().into_owned();
-        if name == "sim.toml" || !name.ends_with(".toml") {
+        // Simulator configs (sim.toml, sim_*.toml) are not training configs.
+        if name.starts_with("sim") || !name.ends_with(".toml") {
             continue;
         }
         let c = TrainConfig::load(&p).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -21,12 +21,14 @@ pub enum BenchCommand {
     /// Simulator throughput: scripted close-and-lift episodes on one env, then on --envs
     /// envs in one rayon pool of --threads threads (default: the number of cores).
     #[command(
-        after_help = "Examples:\n  grasp bench sim\n  grasp bench sim --envs 20 --seconds 10 --json"
+        after_help = "Examples:\n  grasp bench sim\n  grasp bench sim --envs 20 --seconds 10 --json\n  grasp bench sim --compare configs/sim_rapier_rows.toml --rounds 3   # A/B in one run"
     )]
     Sim(BenchSimArgs),
     /// Grasping-environment throughput: --envs environments with a random agent stepped
     /// in one VecEnv (the learner's harness), environment steps per second.
-    #[command(after_help = "Example:\n  grasp bench env --envs 20 --seconds 20 --json")]
+    #[command(
+        after_help = "Examples:\n  grasp bench env --envs 20 --seconds 20 --json\n  grasp bench env --envs 20 --compare configs/sim_rapier_rows.toml --rounds 3"
+    )]
     Env(BenchEnvArgs),
     /// CI regression check: a fixed-seed evaluation of baseline 2 and the shipped policy
     /// on a few objects plus the environment throughput, printed as JSON and compared
@@ -69,6 +71,16 @@ pub struct BenchRegressionArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchEnvArgs {
+    /// Simulator config (TOML); built-in defaults when absent.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// A second simulator config measured in the same run, alternating with the first
+    /// (A/B): prints both and their ratio.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+    /// Measurements per config (medians are reported).
+    #[arg(long, default_value_t = 1)]
+    pub rounds: usize,
     /// Objects the environments draw from.
     #[arg(long, default_value = "train")]
     pub objects: String,
@@ -97,6 +109,13 @@ pub struct BenchSimArgs {
     /// Wall seconds per measurement.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
+    /// A second simulator config measured in the same run, alternating with the first
+    /// (A/B): prints both and their ratio.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+    /// Measurements per config (medians are reported).
+    #[arg(long, default_value_t = 1)]
+    pub rounds: usize,
 }
 
 pub fn run(a: BenchArgs, g: &Global) -> Result<()> {
@@ -175,120 +194,234 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
     Ok(())
 }
 
+/// Loads `--config`, or the built-in defaults.
+fn sim_config(path: Option<&PathBuf>) -> Result<SimConfig> {
+    match path {
+        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display())),
+        None => Ok(SimConfig::default()),
+    }
+}
+
+/// The configs of a run: A (`--config`) and, with `--compare`, B.
+fn ab_configs(
+    config: Option<&PathBuf>,
+    compare: Option<&PathBuf>,
+    rounds: usize,
+) -> Result<Vec<(String, SimConfig)>> {
+    if rounds == 0 || rounds > 100 {
+        anyhow::bail!("--rounds = {rounds}: must be in 1..=100");
+    }
+    let name = |p: Option<&PathBuf>| p.map_or("built-in".to_string(), |p| p.display().to_string());
+    let mut out = vec![(name(config), sim_config(config)?)];
+    if let Some(b) = compare {
+        out.push((name(Some(b)), sim_config(Some(b))?));
+    }
+    Ok(out)
+}
+
+/// Runs `measure` for each config in turn, `rounds` times (A, B, A, B, ...), and returns
+/// each config's measurements.
+fn alternate<T>(
+    configs: &[(String, SimConfig)],
+    rounds: usize,
+    mut measure: impl FnMut(&SimConfig) -> Result<T>,
+) -> Result<Vec<Vec<T>>> {
+    let mut out: Vec<Vec<T>> = configs.iter().map(|_| Vec::new()).collect();
+    for _ in 0..rounds {
+        for (k, (_, cfg)) in configs.iter().enumerate() {
+            out[k].push(measure(cfg)?);
+        }
+    }
+    Ok(out)
+}
+
+/// The median of one figure over a config's measurements.
+fn med<T>(runs: &[T], f: impl Fn(&T) -> f64) -> f64 {
+    grasp::util::stats::median(&runs.iter().map(f).collect::<Vec<_>>())
+}
+
 fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
-    let cfg = match &a.config {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
-        None => SimConfig::default(),
-    };
-    let threads = a.threads.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    });
+    let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
+    let threads = super::rollout::threads(a.threads);
     let robot = Robot::builtin(Side::Left);
-    let one = bench::run(&robot, &cfg, 1, 1, a.seconds)?;
-    let many = bench::run(&robot, &cfg, a.envs, threads, a.seconds)?;
+    let runs = alternate(&configs, a.rounds, |cfg| {
+        let one = bench::run(&robot, cfg, 1, 1, a.seconds)?;
+        let many = bench::run(&robot, cfg, a.envs, threads, a.seconds)?;
+        Ok((one, many))
+    })?;
+    let summary = |r: &[(BenchFigures, BenchFigures)], many: bool| {
+        let pick = |x: &(BenchFigures, BenchFigures)| if many { x.1.clone() } else { x.0.clone() };
+        let figs: Vec<BenchFigures> = r.iter().map(pick).collect();
+        serde_json::json!({
+            "envs": figs[0].envs,
+            "threads": figs[0].threads,
+            "physics_steps": figs.iter().map(|f| f.physics_steps).sum::<u64>(),
+            "physics_steps_per_s": med(&figs, |f| f.physics_steps_per_s),
+            "sim_seconds_per_s": med(&figs, |f| f.sim_seconds_per_s),
+            "control_steps_per_s": med(&figs, |f| f.control_steps_per_s),
+            "episodes_per_s": med(&figs, |f| f.episodes as f64 / f.wall_seconds),
+            "runs": figs,
+        })
+    };
+    let per_config: Vec<serde_json::Value> = configs
+        .iter()
+        .zip(&runs)
+        .map(|((name, cfg), r)| {
+            serde_json::json!({
+                "config": name,
+                "dt": cfg.dt,
+                "substeps": cfg.substeps,
+                "drive": cfg.drive,
+                "limit_rows": cfg.limit_rows,
+                "control_period": cfg.control_period,
+                "single": summary(r, false),
+                "parallel": summary(r, true),
+            })
+        })
+        .collect();
+    let ratio = |key: &str, what: &str| {
+        per_config[0][key][what].as_f64().unwrap_or(f64::NAN)
+            / per_config[1][key][what].as_f64().unwrap_or(f64::NAN)
+    };
+    let ratios = (per_config.len() == 2).then(|| {
+        serde_json::json!({
+            "single_sim_seconds_per_s": ratio("single", "sim_seconds_per_s"),
+            "single_episodes_per_s": ratio("single", "episodes_per_s"),
+            "parallel_sim_seconds_per_s": ratio("parallel", "sim_seconds_per_s"),
+            "parallel_episodes_per_s": ratio("parallel", "episodes_per_s"),
+        })
+    });
     if g.json {
-        let out = serde_json::json!({
-            "dt": cfg.dt,
-            "substeps": cfg.substeps,
-            "control_period": cfg.control_period,
-            "single": one,
-            "parallel": many,
-        });
+        let mut out = per_config[0].clone();
+        out["rounds"] = a.rounds.into();
+        out["mujoco_reference_sim_seconds_per_s"] = serde_json::json!([55.0, 78.0]);
+        if let Some(r) = &ratios {
+            out["compare"] = per_config[1].clone();
+            out["ratio"] = r.clone();
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    println!(
-        "simulator: dt {:.5} s, {} substeps, control period {} s; scripted close-and-lift episodes",
-        cfg.dt, cfg.substeps, cfg.control_period
-    );
-    let row = |f: &BenchFigures| {
+    for c in &per_config {
         println!(
-            "{:>3} envs on {:>2} threads: {:>9.0} physics steps/s  {:>7.1} simulated s/s  {:>8.1} control steps/s  ({} episodes in {:.1} s)",
-            f.envs,
-            f.threads,
-            f.physics_steps_per_s,
-            f.sim_seconds_per_s,
-            f.control_steps_per_s,
-            f.episodes,
-            f.wall_seconds
-        )
-    };
-    row(&one);
-    row(&many);
+            "{}: dt {:.5} s, {} substeps, drive {:?}, limit rows {:?}, control period {} s; \
+             scripted close-and-lift episodes (median of {} rounds)",
+            c["config"].as_str().unwrap_or("?"),
+            c["dt"].as_f64().unwrap_or(f64::NAN),
+            c["substeps"],
+            c["drive"].as_str().unwrap_or("?"),
+            c["limit_rows"].as_str().unwrap_or("?"),
+            c["control_period"],
+            a.rounds
+        );
+        for key in ["single", "parallel"] {
+            let f = &c[key];
+            let num = |k: &str| f[k].as_f64().unwrap_or(f64::NAN);
+            println!(
+                "  {:>3} envs on {:>2} threads: {:>9.0} physics steps/s  {:>7.1} simulated s/s  {:>8.1} control steps/s  {:>6.2} episodes/s",
+                f["envs"],
+                f["threads"],
+                num("physics_steps_per_s"),
+                num("sim_seconds_per_s"),
+                num("control_steps_per_s"),
+                num("episodes_per_s"),
+            );
+        }
+    }
+    if let Some(r) = ratios {
+        println!(
+            "ratio first/second: single {:.2}x simulated s/s ({:.2}x episodes/s), parallel {:.2}x ({:.2}x episodes/s)",
+            r["single_sim_seconds_per_s"].as_f64().unwrap_or(f64::NAN),
+            r["single_episodes_per_s"].as_f64().unwrap_or(f64::NAN),
+            r["parallel_sim_seconds_per_s"].as_f64().unwrap_or(f64::NAN),
+            r["parallel_episodes_per_s"].as_f64().unwrap_or(f64::NAN),
+        );
+    }
     println!("reference: MuJoCo steps the Shadow hand with a block at 55-78 simulated s per wall s on one core");
     Ok(())
 }
 
 fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
-    use grasp::env::api::{Action, Env, VecEnv};
+    use grasp::env::api::{Env, VecEnv};
+    use grasp::env::bench::{random_agent, EnvFigures, Until};
     use grasp::env::grasp::{EnvConfig, GraspEnv};
-    use rand::SeedableRng;
-    use rand_distr::Distribution;
     if a.envs == 0 || !(a.seconds > 0.0 && a.seconds.is_finite()) {
         anyhow::bail!("--envs must be at least 1 and --seconds positive");
     }
+    let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
     let robot = Robot::builtin(Side::Left);
     let model = super::rollout::load_synergy(None, 5)?;
     let objects = super::rollout::sim_objects(&a.objects)?;
     let threads = super::rollout::threads(a.threads);
-    let envs = (0..a.envs)
-        .map(|_| -> Result<Box<dyn Env>> {
-            Ok(Box::new(GraspEnv::new(
-                &robot,
-                objects.clone(),
-                model.clone(),
-                SimConfig::default(),
-                EnvConfig::default(),
-            )?))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let mut venv = VecEnv::new(envs, threads, g.seed.unwrap_or(0))?;
-    let n = venv.action_spec().continuous;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(g.seed.unwrap_or(0));
-    let start = std::time::Instant::now();
-    venv.reset(g.seed.unwrap_or(0))?;
-    let (mut steps, mut episodes) = (0u64, 0u64);
-    while start.elapsed().as_secs_f64() < a.seconds {
-        let actions: Vec<Action> = (0..a.envs)
-            .map(|_| Action {
-                cont: (0..n)
-                    .map(|_| rand_distr::StandardNormal.sample(&mut rng))
-                    .collect(),
-                lift: rand::Rng::random_bool(&mut rng, 0.15),
+    let seed = g.seed.unwrap_or(0);
+    let runs = alternate(&configs, a.rounds, |cfg| -> Result<EnvFigures> {
+        let envs = (0..a.envs)
+            .map(|_| -> Result<Box<dyn Env>> {
+                Ok(Box::new(GraspEnv::new(
+                    &robot,
+                    objects.clone(),
+                    model.clone(),
+                    cfg.clone(),
+                    EnvConfig::default(),
+                )?))
             })
-            .collect();
-        let s = venv.step(&actions)?;
-        steps += a.envs as u64;
-        episodes += s
-            .terminated
-            .iter()
-            .zip(&s.truncated)
-            .filter(|(t, u)| **t || **u)
-            .count() as u64;
-    }
-    let wall = start.elapsed().as_secs_f64();
-    let out = serde_json::json!({
-        "envs": a.envs,
-        "threads": threads,
-        "objects": a.objects,
-        "env_steps": steps,
-        "episodes": episodes,
-        "wall_s": wall,
-        "env_steps_per_s": steps as f64 / wall,
-        "episodes_per_s": episodes as f64 / wall,
+            .collect::<Result<Vec<_>>>()?;
+        let mut venv = VecEnv::new(envs, threads, seed)?;
+        Ok(random_agent(&mut venv, seed, Until::Seconds(a.seconds))?)
+    })?;
+    let per_config: Vec<serde_json::Value> = configs
+        .iter()
+        .zip(&runs)
+        .map(|((name, _), r)| {
+            serde_json::json!({
+                "config": name,
+                "envs": a.envs,
+                "threads": threads,
+                "objects": a.objects,
+                "env_steps_per_s": med(r, |f| f.env_steps_per_s),
+                "episodes_per_s": med(r, |f| f.episodes_per_s),
+                "env_steps": r.iter().map(|f| f.env_steps).sum::<u64>(),
+                "episodes": r.iter().map(|f| f.episodes).sum::<u64>(),
+                "wall_s": r.iter().map(|f| f.wall_s).sum::<f64>(),
+                "runs": r,
+            })
+        })
+        .collect();
+    let ratio = (per_config.len() == 2).then(|| {
+        let v = |k: usize| {
+            per_config[k]["env_steps_per_s"]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+        };
+        v(0) / v(1)
     });
     if g.json {
+        let mut out = per_config[0].clone();
+        out["rounds"] = a.rounds.into();
+        if let Some(r) = ratio {
+            out["compare"] = per_config[1].clone();
+            out["ratio_env_steps_per_s"] = r.into();
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
-    } else {
+        return Ok(());
+    }
+    for c in &per_config {
+        let num = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
         println!(
-            "grasp env, random agent, {} envs on {threads} threads, objects {}: {:.1} env steps/s, {:.2} episodes/s ({steps} steps, {episodes} episodes in {wall:.1} s; reset and stage 1 included)",
+            "{}: grasp env, random agent, {} envs on {threads} threads, objects {}: {:.1} env steps/s, {:.2} episodes/s (median of {} rounds; {} steps, {} episodes in {:.1} s; reset and stage 1 included)",
+            c["config"].as_str().unwrap_or("?"),
             a.envs,
             a.objects,
-            steps as f64 / wall,
-            episodes as f64 / wall
+            num("env_steps_per_s"),
+            num("episodes_per_s"),
+            a.rounds,
+            c["env_steps"],
+            c["episodes"],
+            num("wall_s"),
         );
+    }
+    if let Some(r) = ratio {
+        println!("ratio first/second: {r:.2}x env steps/s");
     }
     Ok(())
 }

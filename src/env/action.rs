@@ -8,11 +8,41 @@
 //! - wrist increments: `d_theta_w = clip(a) * wrist_scale` radians (default 0.05 rad).
 //!
 //! `rho = 1` asks to lift; the continuous part is then ignored (eq. 3 masks it).
+//!
+//! Eq. 2 adds the increments to an anchor posture ([`Anchor`]): the measured angles (the
+//! paper's `P(theta_f)`) or the previous command. Anchored on the measured angles, a finger
+//! blocked by the object is never commanded more than one increment past where it stands,
+//! so the squeeze it can hold through the lift is `kp` times one increment (about 0.1 N m
+//! with the default gains and scales). Anchored on the previous command, the increments
+//! accumulate and the squeeze can grow to the joint's effort limit, as the scripted
+//! baselines' does.
 
 use crate::synergy::SynergyModel;
 use serde::{Deserialize, Serialize};
 
-/// Scales of the continuous action.
+/// The posture eq. 2's increments are added to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Anchor {
+    /// The measured joint angles (the paper's eq. 2; the setting of every checkpoint
+    /// trained before this option existed).
+    #[default]
+    Measured,
+    /// The previous command (the targets after clamping and coupling).
+    Target,
+}
+
+impl Anchor {
+    /// The anchor posture: `measured` or `commanded`.
+    pub fn pick<'a>(self, measured: &'a [f64; 24], commanded: &'a [f64; 24]) -> &'a [f64; 24] {
+        match self {
+            Anchor::Measured => measured,
+            Anchor::Target => commanded,
+        }
+    }
+}
+
+/// Scales of the continuous action and the anchor of eq. 2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ActionConfig {
@@ -20,6 +50,8 @@ pub struct ActionConfig {
     pub eps_scale: f64,
     /// Wrist increment per unit action (rad).
     pub wrist_scale: f64,
+    /// What the increments are added to.
+    pub anchor: Anchor,
 }
 
 impl Default for ActionConfig {
@@ -27,6 +59,7 @@ impl Default for ActionConfig {
         ActionConfig {
             eps_scale: 0.25,
             wrist_scale: 0.05,
+            anchor: Anchor::Measured,
         }
     }
 }
@@ -72,8 +105,8 @@ pub fn component_std(model: &SynergyModel) -> Vec<f64> {
         .collect()
 }
 
-/// The 24 hand targets of a continuous action `raw` (`n + 2` policy outputs) at the
-/// measured angles `q` (paper order): the fingers by eq. 2,
+/// The 24 hand targets of a continuous action `raw` (`n + 2` policy outputs) from the
+/// anchor posture `q` (paper order; see [`Anchor`]): the fingers by eq. 2,
 /// `P^-1(d_eps + P(theta_f))` made feasible for `finger_limits`, the wrist by
 /// `q_w + d_theta_w` clamped to `wrist_limits`. The environment and the robot pipeline
 /// both use this function, so a policy acts identically in both.

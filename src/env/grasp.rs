@@ -5,17 +5,17 @@
 //!    curriculum (eq. 6); the hand is placed above it for a top-down grasp in the start
 //!    posture (grasp point = TH/LF fingertip midpoint `grasp_depth` below the object's
 //!    top, never below its centre);
-//! 2. **stage 1**: the hand follows the human-like closing trajectory T (joint-space
-//!    interpolation with a smooth profile from the start posture to a power grasp) until
-//!    ANY fingertip touches the object or T ends;
+//! 2. **stage 1**: the hand follows the human-like closing trajectory T (a smooth path
+//!    from the start posture to a power grasp, in joint or synergy space: see
+//!    [`super::closing`]) until ANY fingertip touches the object or T ends;
 //! 3. **stage 2**: each [`Env::step`] applies eq. 2 to the finger targets and the wrist
-//!    increments for one control period, or lifts when `rho = 1` and judges the grasp.
-//!    An episode that has not lifted after `max_steps` control steps ends there as a
-//!    failure: its last step is terminal with `r_b = 0` (eq. 4's final step), not a
-//!    time-limit truncation for PPO to bootstrap through, which would value running out
-//!    of time like continuing to squeeze. (The late-lift drift seen in training came
-//!    mainly from the discount, see `configs/quick.toml`; this change alone did not stop
-//!    it.)
+//!    increments for one control period (anchored on the measured angles or the previous
+//!    command, see [`super::action::Anchor`]), or lifts when `rho = 1` and judges the
+//!    grasp. An episode that has not lifted after `max_steps` control steps either ends
+//!    there as a failure ([`AtMaxSteps::Fail`]: its last step is terminal with `r_b = 0`,
+//!    eq. 4's final step, not a time-limit truncation for PPO to bootstrap through, which
+//!    would value running out of time like continuing to squeeze) or lifts
+//!    ([`AtMaxSteps::Lift`], as the paper's episodes all end with a lift attempt).
 //!
 //! Rewards follow eq. 4 and 5 ([`super::reward`]); observations [`super::obs`].
 
@@ -24,6 +24,8 @@
 
 use super::action::{clip_unit, component_std, hand_targets, ActionConfig};
 use super::api::{Action, ActionSpec, Env, Step, StepInfo};
+pub use super::closing::closing_target;
+use super::closing::{ClosingPath, ClosingSpace};
 use super::curriculum::{Curriculum, CurriculumConfig};
 use super::obs::{FrameStack, Modality, ObsLayout};
 use super::reward;
@@ -32,6 +34,19 @@ use crate::sim::{script, HandSim, ObjectSpec, Scene, SimConfig, SimError};
 use crate::synergy::SynergyModel;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
+
+/// What happens when an episode reaches `max_steps` without a lift.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AtMaxSteps {
+    /// The episode ends as a failure (terminal, `r_b = 0`); the setting of every checkpoint
+    /// trained before this option existed.
+    #[default]
+    Fail,
+    /// The hand lifts after the last step's action and the lift is judged (eq. 4's final
+    /// step), as every episode of the paper ends with a lift attempt.
+    Lift,
+}
 
 /// Most 5 mm steps a reset raises the hand to start clear of the object.
 const CLEARANCE_STEPS: usize = 20;
@@ -56,6 +71,10 @@ pub struct EnvConfig {
     pub closing_time: f64,
     /// Period at which stage 1 updates targets and checks the tactile sensors (s).
     pub closing_period: f64,
+    /// Where stage 1's closing trajectory T interpolates (see [`super::closing`]).
+    pub closing: ClosingSpace,
+    /// What happens at `max_steps` without a lift.
+    pub at_max_steps: AtMaxSteps,
     /// Action scales.
     pub action: ActionConfig,
     /// Curriculum (eq. 6); each environment keeps its own window.
@@ -72,6 +91,8 @@ impl Default for EnvConfig {
             grasp_depth: 0.01,
             closing_time: 1.5,
             closing_period: 0.02,
+            closing: ClosingSpace::Joint,
+            at_max_steps: AtMaxSteps::Fail,
             action: ActionConfig::default(),
             curriculum: CurriculumConfig {
                 window: 20,
@@ -173,21 +194,14 @@ pub struct EpisodeSummary {
     pub touched_in_stage1: bool,
 }
 
-/// Target of joint `j` at update `i` of `n` along the closing trajectory T from `start`
-/// to `closed`: a smoothstep path `start + a (closed - start)` with
-/// `a = s^2 (3 - 2 s)`, `s = min(i / n, 1)` (held at `closed` for `i > n`). Stage 1 of the
-/// environment and of the robot pipeline both follow it.
-pub fn closing_target(start: &[f64; 24], closed: &[f64; 24], j: usize, i: usize, n: usize) -> f64 {
-    let s = (i as f64 / n.max(1) as f64).min(1.0);
-    let a = s * s * (3.0 - 2.0 * s);
-    start[j] + a * (closed[j] - start[j])
-}
-
 /// The grasping environment for one simulated hand.
 pub struct GraspEnv {
     cfg: EnvConfig,
+    /// The configured start posture (the baselines start from it).
     start: [f64; 24],
     closed: [f64; 24],
+    /// Stage 1's trajectory T of the policy episodes (from `path.start()`).
+    path: ClosingPath,
     sim: HandSim,
     objects: Vec<(String, ObjectSpec)>,
     current_object: usize,
@@ -225,15 +239,19 @@ impl GraspEnv {
         let stack = FrameStack::new(&layout);
         let eps_std = component_std(&synergy);
         let limits = robot.hand_limits();
+        let finger_limits = robot.finger_limits();
+        let (start, closed) = (posture.angles(), script::power_grasp());
+        let path = ClosingPath::new(cfg.closing, &start, &closed, &synergy, &finger_limits);
         Ok(GraspEnv {
-            start: posture.angles(),
-            closed: script::power_grasp(),
+            start,
+            closed,
+            path,
             sim,
             current_object: 0,
             objects,
             synergy,
             eps_std,
-            finger_limits: robot.finger_limits(),
+            finger_limits,
             wrist_limits: [limits[0], limits[1]],
             layout,
             stack,
@@ -280,9 +298,15 @@ impl GraspEnv {
     }
 
     /// Places object and hand for the episode of `seed` (object choice and eq. 6
-    /// perturbation), without closing. The same seed gives the same scene, so different
-    /// agents can be compared on identical initial poses.
+    /// perturbation), without closing, the hand in the start posture of the policy's
+    /// stage 1. The same seed gives the same scene, so different agents can be compared
+    /// on identical initial object poses.
     pub fn reset_scene(&mut self, seed: u64) -> Result<(), SimError> {
+        self.reset_scene_from(seed, self.path.start())
+    }
+
+    /// [`GraspEnv::reset_scene`] with the hand in posture `start`.
+    fn reset_scene_from(&mut self, seed: u64, start: [f64; 24]) -> Result<(), SimError> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let k = rng.random_range(0..self.objects.len());
         if k != self.current_object {
@@ -290,7 +314,7 @@ impl GraspEnv {
             self.current_object = k;
         }
         let p = self.curriculum.sample(&mut rng);
-        let mut scene = Scene::top_down(&self.objects[k].1, self.start, self.cfg.grasp_depth, 0.0);
+        let mut scene = Scene::top_down(&self.objects[k].1, start, self.cfg.grasp_depth, 0.0);
         scene.object_xy = [p.dx, p.dy];
         scene.object_yaw = p.dyaw;
         // The hand starts clear of the object: where the start posture would overlap a
@@ -322,18 +346,12 @@ impl GraspEnv {
         (n, per)
     }
 
-    /// Target of joint `j` at update `i` of `n` along T: a smooth (smoothstep) path from the
-    /// start posture to the power grasp, held at the end for `i > n`.
-    fn closing_target(&self, j: usize, i: usize, n: usize) -> f64 {
-        closing_target(&self.start, &self.closed, j, i, n)
-    }
-
     /// Stage 1: follows the closing trajectory T until any fingertip touches the object.
     /// Returns whether a touch ended it.
     fn stage1(&mut self) -> bool {
         let (n, per) = self.closing_schedule();
         for i in 1..=n {
-            let t: [f64; 24] = std::array::from_fn(|j| self.closing_target(j, i, n));
+            let t = self.path.target(i, n);
             if self.sim.set_targets(&t).is_err() {
                 return false;
             }
@@ -412,13 +430,14 @@ impl GraspEnv {
     /// baseline 1 closes all fingers in position mode along T (each joint stops at its
     /// target or where its motor saturates at the torque limit); baseline 2 does the same
     /// and freezes FF, MF and RF once their fingertip touches. Both lift at a fixed time
-    /// (T plus a 0.3 s settle).
+    /// (T plus a 0.3 s settle). The baselines close in joint space from the configured
+    /// start posture whatever `closing` says: they are the paper's fixed reference.
     pub fn run_baseline(
         &mut self,
         stop_on_touch: bool,
         seed: u64,
     ) -> Result<EpisodeSummary, SimError> {
-        self.reset_scene(seed)?;
+        self.reset_scene_from(seed, self.start)?;
         let (n, per) = self.closing_schedule();
         let mut frozen = [false; 3];
         let mut targets = self.start;
@@ -431,7 +450,7 @@ impl GraspEnv {
                 if f.is_some_and(|f| frozen[f]) {
                     continue;
                 }
-                *t = self.closing_target(j, i, n);
+                *t = closing_target(&self.start, &self.closed, j, i, n);
             }
             if self.sim.set_targets(&targets).is_err() {
                 ok = false;
@@ -496,14 +515,17 @@ impl Env for GraspEnv {
             return self.lift();
         }
         let s = self.sim.sensors();
-        let theta_f: [f64; 22] = std::array::from_fn(|k| s.q[k + 2]);
+        let commanded = self.sim.targets();
+        let base = self.cfg.action.anchor.pick(&s.q, &commanded);
+        // Eq. 5's theta: the posture the increments were added to.
+        let theta_f: [f64; 22] = std::array::from_fn(|k| base[k + 2]);
         let targets = hand_targets(
             &self.cfg.action,
             &self.eps_std,
             &self.synergy,
             &self.finger_limits,
             &self.wrist_limits,
-            &s.q,
+            base,
             &a.cont,
         );
         let target_f: [f64; 22] = std::array::from_fn(|k| targets[k + 2]);
@@ -511,8 +533,14 @@ impl Env for GraspEnv {
             return self.failed_step();
         }
         self.steps += 1;
-        // Out of time: eq. 4's final step, r_b = 0 (the object was not picked up).
         let timed_out = self.steps >= self.cfg.max_steps;
+        if timed_out && self.cfg.at_max_steps == AtMaxSteps::Lift {
+            // The last action was applied; the lift is the episode's final step. Its
+            // reward is eq. 4's r_b, counted as the step the lift ends (see `lift`).
+            self.steps -= 1;
+            return self.lift();
+        }
+        // Out of time: eq. 4's final step, r_b = 0 (the object was not picked up).
         let r = reward::step_reward(&target_f, &theta_f, timed_out.then_some(false));
         self.episode_return += r;
         let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();
@@ -590,23 +618,4 @@ pub fn run_episode(env: &mut GraspEnv, agent: &mut dyn Agent, seed: u64) -> Epis
     env.last_episode()
         .cloned()
         .unwrap_or_else(|| unreachable!("a finished episode has a summary"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn closing_target_is_a_smoothstep_hand_computed() {
-        let start = [0.0; 24];
-        let mut closed = [0.0; 24];
-        closed[3] = 2.0;
-        // s = 1/2 -> a = 0.25 * 2 = 0.5 -> 1.0; s = 1/4 -> a = 0.0625 * 2.5 = 0.15625.
-        assert!((closing_target(&start, &closed, 3, 2, 4) - 1.0).abs() < 1e-12);
-        assert!((closing_target(&start, &closed, 3, 1, 4) - 0.3125).abs() < 1e-12);
-        assert_eq!(closing_target(&start, &closed, 3, 0, 4), 0.0);
-        // Held at the end.
-        assert_eq!(closing_target(&start, &closed, 3, 9, 4), 2.0);
-        assert_eq!(closing_target(&start, &closed, 5, 2, 4), 0.0);
-    }
 }

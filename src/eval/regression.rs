@@ -12,12 +12,12 @@
 //! so across profiles only the counts are compared.
 
 use super::{evaluate, AgentSpec, EvalError};
-use crate::env::api::{Action, Env, VecEnv};
+use crate::env::api::{Env, VecEnv};
+use crate::env::bench::{random_agent, Until};
 use crate::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use crate::robot::{Robot, Side};
 use crate::sim::{ObjectSpec, SimConfig};
 use crate::synergy::SynergyModel;
-use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -274,7 +274,6 @@ fn throughput(
     model: &SynergyModel,
     sim: &SimConfig,
 ) -> Result<f64, EvalError> {
-    use rand_distr::Distribution;
     let n_envs = setup.throughput_envs.max(1);
     let envs = (0..n_envs)
         .map(|_| -> Result<Box<dyn Env>, EvalError> {
@@ -289,24 +288,9 @@ fn throughput(
         .collect::<Result<Vec<_>, _>>()?;
     let agent_err = |e: crate::env::api::EnvError| EvalError::Agent(e.to_string());
     let mut venv = VecEnv::new(envs, setup.threads, setup.seed).map_err(agent_err)?;
-    let n = venv.action_spec().continuous;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(setup.seed);
-    let start = std::time::Instant::now();
-    venv.reset(setup.seed).map_err(agent_err)?;
-    let mut steps = 0usize;
-    while steps < setup.throughput_steps.max(1) {
-        let actions: Vec<Action> = (0..n_envs)
-            .map(|_| Action {
-                cont: (0..n)
-                    .map(|_| rand_distr::StandardNormal.sample(&mut rng))
-                    .collect(),
-                lift: rand::Rng::random_bool(&mut rng, 0.15),
-            })
-            .collect();
-        venv.step(&actions).map_err(agent_err)?;
-        steps += n_envs;
-    }
-    Ok(steps as f64 / start.elapsed().as_secs_f64().max(1e-9))
+    let until = Until::Steps(setup.throughput_steps as u64);
+    let f = random_agent(&mut venv, setup.seed, until).map_err(agent_err)?;
+    Ok(f.env_steps_per_s)
 }
 
 #[cfg(test)]

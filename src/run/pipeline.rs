@@ -14,15 +14,15 @@
 //!    the empty hand, still, at the start of the attempt;
 //! 2. the fingers take the preshape (in steps of at most the safety limiter's maximum
 //!    change, each clamp logged), the arm moves to the pre-grasp and grasp poses;
-//! 3. stage 1: the closing trajectory T of the environment
-//!    ([`closing_target`], from the preshape to the power grasp) until any fingertip is in
-//!    contact (calibrated tactile threshold);
+//! 3. stage 1: the closing trajectory T of the environment ([`ClosingPath`], in the
+//!    policy's closing space, from the preshape to the power grasp) until any fingertip is
+//!    in contact (calibrated tactile threshold);
 //! 4. stage 2: the policy acts on the SAME observation as in simulation
 //!    ([`ObsLayout::frame`], [`FrameStack`]) built from the mapped sensors (calibrated
 //!    contacts, drift-compensated torque levels, joint angles), and its action becomes
-//!    hand targets through the SAME eq.-2 mapping ([`hand_targets`]), until it decides to
-//!    lift or `max_steps` pass (then the attempt fails, as an environment episode is
-//!    truncated);
+//!    hand targets through the SAME eq.-2 mapping ([`hand_targets`], from the same anchor:
+//!    measured angles or the last command sent), until it decides to lift or `max_steps`
+//!    pass (then, as in the policy's environment, the attempt either fails or lifts);
 //! 5. the lift; the outcome is the backend's judgement where it has one (the simulator:
 //!    object held after the lift), otherwise the fingertips: held when at least
 //!    `held_min_contacts` report contact after the lift.
@@ -32,7 +32,8 @@
 
 use super::RunError;
 use crate::env::action::{clip_unit, component_std, hand_targets};
-use crate::env::grasp::{closing_target, Agent, EnvConfig};
+use crate::env::closing::ClosingPath;
+use crate::env::grasp::{Agent, AtMaxSteps, EnvConfig};
 use crate::env::obs::{FrameStack, ObsLayout};
 use crate::eval::PolicyAgent;
 use crate::hardware::calibration::TactileCalibration;
@@ -726,14 +727,20 @@ fn attempt_body<B: HandArm>(
     at.arm.move_arm(&ArmMotion::Joints(plan.pregrasp_q))?;
     at.arm.move_arm(&ArmMotion::Joints(plan.grasp_q))?;
     // 3. Stage 1: the closing trajectory T until a fingertip touches.
-    let closed = script::power_grasp();
+    let finger_limits = robot.finger_limits();
+    let path = ClosingPath::new(
+        env.closing,
+        &plan.preshape,
+        &script::power_grasp(),
+        &policy.synergy,
+        &finger_limits,
+    );
     let n = (env.closing_time / env.closing_period).round().max(1.0) as usize;
-    let start = plan.preshape;
     let mut touched = false;
     let mut updates = 0;
     m = at.read()?;
     for i in 1..=n {
-        let t: [f64; 24] = std::array::from_fn(|j| closing_target(&start, &closed, j, i, n));
+        let t = path.target(i, n);
         m = at.command(&t, Vec::new(), env.closing_period)?;
         updates = i;
         if m.tactile.contains(&true) {
@@ -743,7 +750,6 @@ fn attempt_body<B: HandArm>(
     }
     // 4. Stage 2: the policy.
     let hl = robot.hand_limits();
-    let finger_limits = robot.finger_limits();
     let wrist_limits = [hl[0], hl[1]];
     let n_cont = policy.synergy.n_components() + 2;
     let mut stack = FrameStack::new(&policy.layout);
@@ -773,7 +779,7 @@ fn attempt_body<B: HandArm>(
             &policy.synergy,
             &finger_limits,
             &wrist_limits,
-            &m.raw.joint_angles,
+            env.action.anchor.pick(&m.raw.joint_angles, &at.last_sent),
             &a.cont,
         );
         m = at.command(&targets, logged, cfg.control_period_s)?;
@@ -796,6 +802,12 @@ fn attempt_body<B: HandArm>(
         log_lines: 0,
         time_s: 0.0,
     };
+    if !lifted && env.at_max_steps == AtMaxSteps::Lift {
+        // The policy was trained to lift at the step cap.
+        lifted = true;
+        let hold = at.last_sent;
+        at.log_step(&m, Vec::new(), hold, Vec::new())?;
+    }
     if !lifted {
         return Ok(AttemptOutcome {
             reason: format!(

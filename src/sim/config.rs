@@ -90,6 +90,46 @@ pub struct LiftConfig {
     pub hold_time: f64,
     /// The object's lowest point must be this high above the table top for success (m).
     pub success_height: f64,
+    /// End the lift early once its outcome is decided: every hand collider is above the
+    /// object's highest point (the hand only rises, so it cannot carry the object any
+    /// more). Judged as at the end: a failure.
+    #[serde(default = "default_true")]
+    pub stop_when_dropped: bool,
+}
+
+/// How the joints' PD position control is simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DriveModel {
+    /// An implicit joint spring and damper folded into the multibody's mass matrix (as
+    /// MuJoCo does with actuators): no solver row. The spring's rest point is moved before
+    /// every physics step so that the PD effort it applies, `kp (target - q) - kd qdot`, is
+    /// clamped to the joint's effort limit.
+    #[default]
+    Spring,
+    /// rapier's force-based position motor: one solver row per joint, each of which costs
+    /// a dense solve against the hand multibody's 25 x 25 mass matrix in every step.
+    MotorRow,
+}
+
+/// Which joint limits become solver rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LimitRows {
+    /// Only the limits of joints within `limit_margin + |qdot| dt` of a bound (rapier emits
+    /// a row for every enabled limit, even one far from its bound, where it does nothing).
+    #[default]
+    Near,
+    /// Every limit in every step (rapier's behaviour).
+    Always,
+}
+
+fn default_limit_margin() -> f64 {
+    0.05
+}
+
+fn default_true() -> bool {
+    true
 }
 
 /// Limits that end an episode with a physics failure.
@@ -129,6 +169,17 @@ pub struct SimConfig {
     /// configs/sim.toml).
     #[serde(default)]
     pub object_angular_damping: f64,
+    /// How the joints' PD control is simulated (see configs/sim.toml).
+    #[serde(default)]
+    pub drive: DriveModel,
+    /// Which joint limits become solver rows (see configs/sim.toml).
+    #[serde(default)]
+    pub limit_rows: LimitRows,
+    /// Distance to a joint bound (rad, m for the lift) within which its limit row is
+    /// emitted with `limit_rows = "near"`; the distance covered in one step at the joint's
+    /// current speed is added.
+    #[serde(default = "default_limit_margin")]
+    pub limit_margin: f64,
     /// Seconds one control action lasts.
     pub control_period: f64,
     /// Gravity along world z (m/s^2, negative: down).
@@ -223,6 +274,14 @@ impl SimConfig {
                 "object_angular_damping",
                 self.object_angular_damping,
                 "must be at most 10 1/s",
+            ));
+        }
+        pos("limit_margin", self.limit_margin)?;
+        if self.limit_margin > 1.0 {
+            return Err(bad(
+                "limit_margin",
+                self.limit_margin,
+                "must be at most 1 rad",
             ));
         }
         pos("control_period", self.control_period)?;

@@ -32,10 +32,10 @@
 //! clones it, gives it a fresh pipeline, broad phase, narrow phase and island manager,
 //! writes the start posture into the joint coordinates and places hand and object.
 
-use super::config::SimConfig;
+use super::config::{DriveModel, LimitRows, SimConfig};
 use super::object::{ObjectError, ObjectSpec};
 use super::placement::{hand_root_pose, PlacementError};
-use super::sensors::{pd_effort, Sensors};
+use super::sensors::{near_limit, pd_effort, spring_rest, Sensors};
 use crate::robot::joints::{COUPLED_FINGERS, HAND_JOINTS};
 use crate::robot::model::{Geometry, JointKind};
 use crate::robot::Robot;
@@ -230,6 +230,8 @@ struct Sets {
 #[derive(Debug, Clone, Copy)]
 struct HandJoint {
     link: usize,
+    /// Whether the joint has limits (revolute; a continuous joint has none).
+    limited: bool,
     kp: f64,
     kd: f64,
     effort: f64,
@@ -245,6 +247,11 @@ const TABLE_GROUP: Group = Group::GROUP_2;
 const OBJECT_GROUP: Group = Group::GROUP_3;
 /// Half length (m) of the capsule that stands in for a URDF sphere (see `HandSim::new`).
 const SPHERE_AS_CAPSULE_HALF_LENGTH: f32 = 1e-4;
+/// Travel of the lift joint (m): its limits, far from anything an episode reaches.
+const LIFT_LIMITS: [f64; 2] = [-0.5, 1.0];
+/// Height (m) by which the whole hand must clear the object's top for a lift to count as
+/// decided (see `HandSim::dropped`).
+const DECIDED_CLEARANCE: f64 = 0.01;
 /// Mass given to a body whose links have no inertial (kg).
 const MIN_LINK_MASS: f64 = 1e-3;
 
@@ -468,17 +475,23 @@ impl HandSim {
             }
         }
         // The lift joint (frames set at reset).
-        let lift = GenericJointBuilder::new(JointAxesMask::LOCKED_PRISMATIC_AXES)
-            .limits(JointAxis::LinX, [-0.5, 1.0])
-            .motor_model(JointAxis::LinX, MotorModel::ForceBased)
-            .motor_max_force(JointAxis::LinX, cfg.motors.lift_max_force as f32)
-            .motor_position(
-                JointAxis::LinX,
-                0.0,
-                cfg.motors.lift.kp as f32,
-                cfg.motors.lift.kd as f32,
-            )
-            .build();
+        let motor_rows = cfg.drive == DriveModel::MotorRow;
+        let mut lift = GenericJointBuilder::new(JointAxesMask::LOCKED_PRISMATIC_AXES).limits(
+            JointAxis::LinX,
+            [LIFT_LIMITS[0] as f32, LIFT_LIMITS[1] as f32],
+        );
+        if motor_rows {
+            lift = lift
+                .motor_model(JointAxis::LinX, MotorModel::ForceBased)
+                .motor_max_force(JointAxis::LinX, cfg.motors.lift_max_force as f32)
+                .motor_position(
+                    JointAxis::LinX,
+                    0.0,
+                    cfg.motors.lift.kp as f32,
+                    cfg.motors.lift.kd as f32,
+                );
+        }
+        let lift = lift.build();
         sets.multibody_joints
             .insert(mb_root, rb_root, lift, true)
             .ok_or_else(|| err("cannot attach the forearm to the lift".into()))?;
@@ -501,10 +514,13 @@ impl HandSim {
             };
             let mut b = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
                 .local_frame1(pose_f32(&f1))
-                .local_frame2(pose_f32(&f2))
-                .motor_model(JointAxis::AngX, MotorModel::ForceBased)
-                .motor_max_force(JointAxis::AngX, j.effort as f32)
-                .motor_position(JointAxis::AngX, 0.0, gains.kp as f32, gains.kd as f32);
+                .local_frame2(pose_f32(&f2));
+            if motor_rows {
+                b = b
+                    .motor_model(JointAxis::AngX, MotorModel::ForceBased)
+                    .motor_max_force(JointAxis::AngX, j.effort as f32)
+                    .motor_position(JointAxis::AngX, 0.0, gains.kp as f32, gains.kd as f32);
+            }
             if j.kind == JointKind::Revolute {
                 b = b.limits(JointAxis::AngX, [j.lower as f32, j.upper as f32]);
             }
@@ -517,6 +533,7 @@ impl HandSim {
         // Hand joint table.
         let mut joints = [HandJoint {
             link: 0,
+            limited: false,
             kp: 0.0,
             kd: 0.0,
             effort: 0.0,
@@ -533,6 +550,7 @@ impl HandSim {
             let jj = &robot.joints[ji];
             joints[n] = HandJoint {
                 link,
+                limited: jj.kind == JointKind::Revolute,
                 kp: gains.kp,
                 kd: gains.kd,
                 effort: jj.effort,
@@ -569,6 +587,21 @@ impl HandSim {
                     coeff: 1.0,
                     offset: 0.0,
                 });
+            }
+            // Implicit drives: the PD law's damping on each driven DoF (the spring is set
+            // before every step, see `update_drives`).
+            if !motor_rows {
+                let mut dofs: Vec<(usize, f64)> = joints
+                    .iter()
+                    .filter_map(|hj| mb.link(hj.link).map(|l| (l.assembly_id(), hj.kd)))
+                    .collect();
+                if let Some(l) = mb.link(lift_link) {
+                    dofs.push((l.assembly_id(), cfg.motors.lift.kd));
+                }
+                let damping = mb.damping_mut();
+                for (dof, kd) in dofs {
+                    damping[dof] = kd as f32;
+                }
             }
         }
         let hand_bodies = body_links.iter().map(|(b, _)| *b).collect();
@@ -798,7 +831,12 @@ impl HandSim {
         self.targets
     }
 
+    /// Writes the targets into the motor rows (`drive = "motor_row"`); with implicit
+    /// drives they take effect in [`HandSim::step_physics`] (see `update_drives`).
     fn apply_targets(&mut self) {
+        if self.cfg.drive != DriveModel::MotorRow {
+            return;
+        }
         let Some(link) = self
             .sets
             .multibody_joints
@@ -851,6 +889,7 @@ impl HandSim {
         if self.failure.is_some() {
             return false;
         }
+        self.update_drives();
         let gravity = Vector::new(0.0, 0.0, self.cfg.gravity as f32);
         let stepped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             self.pipeline.step(
@@ -877,6 +916,69 @@ impl HandSim {
         };
         self.record_step();
         self.failure.is_none()
+    }
+
+    /// Before a physics step: moves each implicit spring's rest point so that it applies
+    /// the clamped PD effort of [`pd_effort`] at the current state (`drive = "spring"`),
+    /// and turns each joint limit's solver row on only near its bound (`limit_rows =
+    /// "near"`).
+    fn update_drives(&mut self) {
+        let spring = self.cfg.drive == DriveModel::Spring;
+        let near = self.cfg.limit_rows == LimitRows::Near;
+        if !spring && !near {
+            return;
+        }
+        let (dt, margin) = (self.cfg.dt, self.cfg.limit_margin);
+        let Some(link) = self
+            .sets
+            .multibody_joints
+            .rigid_body_link(self.mb_root)
+            .copied()
+        else {
+            return;
+        };
+        let Some(mb) = self.sets.multibody_joints.get_multibody_mut(link.multibody) else {
+            return;
+        };
+        let lift = self.cfg.motors.lift;
+        let lift_joint = HandJoint {
+            link: self.lift_link,
+            limited: true,
+            kp: lift.kp,
+            kd: lift.kd,
+            effort: self.cfg.motors.lift_max_force,
+            lower: LIFT_LIMITS[0],
+            upper: LIFT_LIMITS[1],
+        };
+        let drives = self
+            .joints
+            .iter()
+            .zip(self.targets)
+            .map(|(hj, t)| (hj, t, JointAxesMask::ANG_X, 3))
+            .chain(std::iter::once((
+                &lift_joint,
+                self.lift_target,
+                JointAxesMask::LIN_X,
+                0,
+            )));
+        for (hj, target, axis, coord) in drives {
+            let Some(l) = mb.link(hj.link) else {
+                continue;
+            };
+            let q = l.joint().coords()[coord] as f64;
+            let qd = mb.joint_velocity(l)[0] as f64;
+            let Some(l) = mb.link_mut(hj.link) else {
+                continue;
+            };
+            if spring {
+                let rest = spring_rest(hj.kp, hj.kd, target, q, qd, hj.effort);
+                l.joint.set_spring(coord, hj.kp as f32, rest as f32);
+            }
+            if near && hj.limited {
+                let active = near_limit(q, qd, hj.lower, hj.upper, margin, dt);
+                l.joint.data.limit_axes.set(axis, active);
+            }
+        }
     }
 
     fn check_physics(&self) -> Option<PhysicsFailure> {
@@ -1129,10 +1231,27 @@ impl HandSim {
         }
     }
 
+    /// Whether a lift is decided as a failure: every hand collider is above the object's
+    /// highest point by `DECIDED_CLEARANCE`. The hand only rises from here, so it can no
+    /// longer touch, let alone carry, the object.
+    fn dropped(&self) -> bool {
+        let Some(obj) = self.sets.colliders.get(self.object_collider) else {
+            return false;
+        };
+        let top = obj.compute_aabb().maxs.z as f64;
+        self.hand_colliders.iter().all(|&h| {
+            self.sets
+                .colliders
+                .get(h)
+                .is_some_and(|c| c.compute_aabb().mins.z as f64 > top + DECIDED_CLEARANCE)
+        })
+    }
+
     /// Raises the hand by `lift.height` over `lift.ramp_time` with a smooth (cubic) profile,
     /// finger targets held, holds `lift.hold_time`, and judges: success when the object's
     /// lowest point is at least `lift.success_height` above the table AND it touches the
-    /// hand.
+    /// hand. With `lift.stop_when_dropped` the lift ends as soon as the whole hand is above
+    /// the object (a failure either way).
     pub fn lift_and_judge(&mut self) -> LiftOutcome {
         let l = self.cfg.lift;
         let ramp = (l.ramp_time / self.cfg.dt).round().max(1.0) as usize;
@@ -1145,6 +1264,9 @@ impl HandSim {
             self.lift_target = l.height * s * s * (3.0 - 2.0 * s);
             self.apply_targets();
             self.step_physics();
+            if l.stop_when_dropped && self.dropped() {
+                break;
+            }
         }
         let lowest = self.object_lowest_z();
         let in_contact = self.hand_object_force() > 0.0;

@@ -28,8 +28,9 @@
 
 use super::TrainError;
 use crate::env::action::ActionConfig;
+use crate::env::closing::ClosingSpace;
 use crate::env::curriculum::CurriculumConfig;
-use crate::env::grasp::EnvConfig;
+use crate::env::grasp::{AtMaxSteps, EnvConfig};
 use crate::env::obs::Modality;
 use crate::policy::PolicyConfig;
 use crate::ppo::PpoConfig;
@@ -123,6 +124,8 @@ struct EnvSection {
     grasp_depth: Option<f64>,
     closing_time: Option<f64>,
     closing_period: Option<f64>,
+    closing: Option<ClosingSpace>,
+    at_max_steps: Option<AtMaxSteps>,
     action: Option<ActionConfig>,
     curriculum: Option<CurriculumConfig>,
 }
@@ -295,6 +298,8 @@ impl TrainConfig {
             grasp_depth: e.grasp_depth.unwrap_or(d.grasp_depth),
             closing_time: e.closing_time.unwrap_or(d.closing_time),
             closing_period: e.closing_period.unwrap_or(d.closing_period),
+            closing: e.closing.unwrap_or(d.closing),
+            at_max_steps: e.at_max_steps.unwrap_or(d.at_max_steps),
             action: e.action.unwrap_or(d.action),
             curriculum: e.curriculum.unwrap_or(d.curriculum),
         };

@@ -1,6 +1,7 @@
-//! Small helpers shared across the crate: atomic writes, TOML configuration loading and
-//! the torque levels.
+//! Small helpers shared across the crate: atomic writes, TOML configuration loading, the
+//! torque levels and the statistics of measurements.
 
 pub mod config;
 pub mod fsx;
 pub mod levels;
+pub mod stats;
