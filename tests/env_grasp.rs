@@ -81,3 +81,60 @@ fn an_episode_that_never_lifts_ends_as_a_terminal_failure() {
     let earlier: f64 = steps[..2].iter().map(|s| f64::from(s.reward)).sum();
     assert!((summary.episode_return - earlier).abs() < 1e-6);
 }
+
+#[test]
+fn at_max_steps_lift_ends_the_episode_with_a_judged_lift() {
+    use grasp::env::grasp::AtMaxSteps;
+    let mut e = env_with(EnvConfig {
+        max_steps: 2,
+        at_max_steps: AtMaxSteps::Lift,
+        ..EnvConfig::default()
+    });
+    e.reset(5);
+    let hold = Action {
+        cont: vec![0.0; e.action_spec().continuous],
+        lift: false,
+    };
+    let first = e.step(&hold);
+    assert!(!first.terminated && first.info.success.is_none());
+    let last = e.step(&hold);
+    // The second step's action is applied, then the lift: the final step of eq. 4, its
+    // reward r_b the judged outcome.
+    assert!(last.terminated && !last.truncated, "{last:?}");
+    let summary = e.last_episode().expect("finished");
+    assert!(summary.lifted, "{summary:?}");
+    assert_eq!(summary.steps, 2);
+    assert_eq!(last.info.success, Some(summary.success));
+    assert_eq!(last.reward, f32::from(u8::from(summary.success)));
+}
+
+#[test]
+fn anchoring_on_the_command_accumulates_the_squeeze() {
+    use grasp::env::action::Anchor;
+    // The same squeeze from the same start: anchored on the previous command, the key
+    // closing joints' targets run ahead of the blocked fingers and keep growing; anchored
+    // on the measured angles, each target is one increment past the finger.
+    let gap = |anchor: Anchor| {
+        let mut cfg = EnvConfig::default();
+        cfg.action.anchor = anchor;
+        let mut e = env_with(cfg);
+        e.reset(5);
+        let squeeze = Action {
+            cont: vec![1.0; e.action_spec().continuous],
+            lift: false,
+        };
+        for _ in 0..4 {
+            e.step(&squeeze);
+        }
+        let (q, _) = e.sim().joint_state();
+        let t = e.sim().targets();
+        grasp::robot::joints::KEY_CLOSING_JOINTS
+            .iter()
+            .filter_map(|n| grasp::robot::joints::hand_index(n))
+            .map(|j| t[j] - q[j])
+            .sum::<f64>()
+    };
+    let measured = gap(Anchor::Measured);
+    let target = gap(Anchor::Target);
+    assert!(target > measured + 0.1, "target {target} vs measured {measured}");
+}
