@@ -131,7 +131,7 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
         trials: a.trials,
         seed: g.seed.unwrap_or(0),
         policy: a.policy.clone(),
-        threads: super::rollout::threads(a.threads),
+        threads: super::rollout::threads(a.threads)?,
         throughput_envs: a.envs,
         throughput_steps: a.steps,
     };
@@ -180,11 +180,7 @@ fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
         Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
         None => SimConfig::default(),
     };
-    let threads = a.threads.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    });
+    let threads = super::rollout::threads(a.threads)?;
     let robot = Robot::builtin(Side::Left);
     let one = bench::run(&robot, &cfg, 1, 1, a.seconds)?;
     let many = bench::run(&robot, &cfg, a.envs, threads, a.seconds)?;
@@ -232,7 +228,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     let robot = Robot::builtin(Side::Left);
     let model = super::rollout::load_synergy(None, 5)?;
     let objects = super::rollout::sim_objects(&a.objects)?;
-    let threads = super::rollout::threads(a.threads);
+    let threads = super::rollout::threads(a.threads)?;
     let envs = (0..a.envs)
         .map(|_| -> Result<Box<dyn Env>> {
             Ok(Box::new(GraspEnv::new(
