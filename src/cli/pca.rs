@@ -89,7 +89,7 @@ pub struct CollectArgs {
     #[arg(long)]
     pub sim_config: Option<PathBuf>,
     /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    #[arg(long)]
     pub threads: Option<usize>,
 }
 
