@@ -5,10 +5,15 @@ mod cli;
 use clap::Parser;
 
 fn main() {
+    cli::quiet_broken_pipe();
     let args = cli::Cli::parse();
     cli::init_logging(&args.global);
     if let Err(err) = cli::dispatch(args) {
-        eprintln!("error: {err:#}");
+        if cli::is_broken_pipe(&err) {
+            // The reader went away (`grasp ... | head`): nothing left to tell anyone.
+            std::process::exit(0);
+        }
+        eprintln!("error: {}", cli::error_text(&err));
         std::process::exit(1);
     }
 }

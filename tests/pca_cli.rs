@@ -301,3 +301,23 @@ fn show_rejects_bad_models() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("none.json"));
 }
+
+#[test]
+fn rank_deficient_data_is_refused() {
+    // Every data line is one of two postures: the data vary along one direction only.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = format!("{}\n", lines[0]);
+    for i in 0..30 {
+        out.push_str(lines[1 + i % 2]);
+        out.push('\n');
+    }
+    let data = dir.path().join("flat.csv");
+    std::fs::write(&data, out).unwrap();
+    let err = fit_fails(&data);
+    assert!(
+        err.contains("only 1 independent direction") && err.contains("ask for at most 1"),
+        "{err}"
+    );
+}

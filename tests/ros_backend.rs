@@ -351,3 +351,62 @@ fn malformed_messages_and_urls_are_named() {
         .to_string();
     assert!(e.contains("only ws://"), "{e}");
 }
+
+/// The rosbridge message decoder never panics on junk or on mutated valid messages (a
+/// byte changed, inserted, removed or the message cut), and still decodes the valid ones.
+/// `PROPTEST_CASES` sets the cases per property (default 3000).
+#[test]
+fn decoder_survives_fuzzed_messages() {
+    use grasp::hardware::ros::RosDecoder;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, TestRunner};
+    let cases = std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3000);
+    let seeds = [joint_states().to_string(), tactile().to_string()];
+    let mut dec = RosDecoder::new(RosConfig::default());
+    for s in &seeds {
+        dec.handle(s, 1.0).unwrap();
+    }
+    assert!(dec.hand_q().is_some() && dec.tactile().is_some() && dec.arm_q().is_some());
+    let edit = (0usize..4, any::<usize>(), any::<u8>());
+    let strategy = (0usize..2, prop::collection::vec(edit, 1..8));
+    let mut runner = TestRunner::new(Config {
+        cases,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    runner
+        .run(&strategy, |(which, edits)| {
+            let mut b = seeds[which].clone().into_bytes();
+            for (op, pos, byte) in edits {
+                let n = b.len().max(1);
+                match op {
+                    0 if !b.is_empty() => b[pos % n] = byte,
+                    1 => b.insert(pos % (b.len() + 1), byte),
+                    2 if !b.is_empty() => {
+                        b.remove(pos % n);
+                    }
+                    _ => b.truncate(pos % (b.len() + 1)),
+                }
+            }
+            let mut d = RosDecoder::new(RosConfig::default());
+            if let Err(e) = d.handle(&String::from_utf8_lossy(&b), 2.0) {
+                prop_assert!(!e.to_string().is_empty());
+            }
+            Ok(())
+        })
+        .unwrap();
+    let mut runner = TestRunner::new(Config {
+        cases,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    runner
+        .run(&".{0,200}", |text| {
+            let _ = RosDecoder::new(RosConfig::default()).handle(&text, 0.0);
+            Ok(())
+        })
+        .unwrap();
+}

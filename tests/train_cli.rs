@@ -326,3 +326,132 @@ fn shipped_configs_load() {
         8
     );
 }
+
+#[test]
+fn a_run_killed_before_its_first_checkpoint_starts_afresh() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = cartpole_config(tmp.path(), 128);
+    // What `grasp train` leaves when killed during its first update: the resolved config,
+    // a metrics file without rows, an event file, no checkpoint.
+    let run = tmp.path().join("run");
+    std::fs::create_dir_all(&run).unwrap();
+    let c = TrainConfig::load(&cfg).unwrap();
+    std::fs::write(run.join("config.toml"), c.to_toml_string().unwrap()).unwrap();
+    std::fs::write(run.join("metrics.csv"), format!("{HEADER}\n")).unwrap();
+    std::fs::write(run.join("events.out.tfevents.1.grasp"), b"").unwrap();
+    for resume in [false, true] {
+        let mut args = vec!["train", "--config", s(&cfg), "--out", s(&run)];
+        if resume {
+            args.push("--resume");
+            std::fs::remove_dir_all(run.join("checkpoints")).unwrap();
+        }
+        let out = ok(&grasp(&args));
+        assert!(out.contains("completed: 2 updates (2 new)"), "{out}");
+        assert_eq!(updates(&run), vec![1, 2]);
+        let events = std::fs::read_dir(&run)
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .contains("tfevents")
+            })
+            .count();
+        assert_eq!(events, 1);
+    }
+}
+
+#[test]
+fn resume_without_metrics_keeps_the_best_checkpoint() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = cartpole_config(tmp.path(), 128);
+    let run = tmp.path().join("run");
+    ok(&grasp(&["train", "--config", s(&cfg), "--out", s(&run)]));
+    let best = run.join("checkpoints/best/checkpoint.safetensors");
+    let before = std::fs::read(&best).unwrap();
+    std::fs::remove_file(run.join("metrics.csv")).unwrap();
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        "256",
+    ]);
+    assert_eq!(e.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        err.contains("metrics.csv is missing") && err.contains("checkpoints/best"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&best).unwrap(), before);
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_finishes_the_update_writes_a_checkpoint_and_exits_130() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Many updates and no periodic checkpoint: only the interrupt writes one.
+    let cfg = write(
+        tmp.path(),
+        "cp.toml",
+        "name = \"cp\"\nseed = 5\ntotal_timesteps = 6400000\nnum_envs = 2\nthreads = 1\n\
+         checkpoint_every = 100000\nplot_every = 100000\nbest_window = 2\n[ppo]\n\
+         num_steps = 32\nnum_minibatches = 2\nupdate_epochs = 2\n[policy]\nkind = \"mlp\"\n\
+         mlp_hidden = 16\n[env]\nkind = \"cartpole\"\ncartpole_max_steps = 50\n",
+    );
+    let run = tmp.path().join("run");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .args(["train", "--config", s(&cfg), "--out", s(&run)])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for a few updates.
+    let start = std::time::Instant::now();
+    let ready = || run.join("metrics.csv").is_file() && updates(&run).len() >= 3;
+    while !ready() {
+        assert!(start.elapsed().as_secs() < 120, "no updates");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let st = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(start.elapsed().as_secs() < 60, "did not stop after SIGINT");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(130), "{stdout}");
+    assert!(stdout.starts_with("interrupted: "), "{stdout}");
+    let done = updates(&run);
+    assert!(done.len() >= 3);
+    // The checkpoint holds the last finished update: a resume continues after it.
+    assert!(run
+        .join("checkpoints/latest/checkpoint.safetensors")
+        .is_file());
+    let n = *done.last().unwrap();
+    let total = (n + 1) * 64;
+    let more = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        &total.to_string(),
+    ]));
+    assert!(
+        more.contains(&format!("{} updates (1 new)", n + 1)),
+        "{more}"
+    );
+}

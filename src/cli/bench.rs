@@ -150,7 +150,7 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
         trials: a.trials,
         seed: g.seed.unwrap_or(0),
         policy: a.policy.clone(),
-        threads: super::rollout::threads(a.threads),
+        threads: super::rollout::threads(a.threads)?,
         throughput_envs: a.envs,
         throughput_steps: a.steps,
     };
@@ -242,7 +242,7 @@ fn med<T>(runs: &[T], f: impl Fn(&T) -> f64) -> f64 {
 
 fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
     let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
-    let threads = super::rollout::threads(a.threads);
+    let threads = super::rollout::threads(a.threads)?;
     let robot = Robot::builtin(Side::Left);
     let runs = alternate(&configs, a.rounds, |cfg| {
         let one = bench::run(&robot, cfg, 1, 1, a.seconds)?;
@@ -352,7 +352,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     let robot = Robot::builtin(Side::Left);
     let model = super::rollout::load_synergy(None, 5)?;
     let objects = super::rollout::sim_objects(&a.objects)?;
-    let threads = super::rollout::threads(a.threads);
+    let threads = super::rollout::threads(a.threads)?;
     let seed = g.seed.unwrap_or(0);
     let runs = alternate(&configs, a.rounds, |cfg| -> Result<EnvFigures> {
         let envs = (0..a.envs)

@@ -185,7 +185,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
         every: a.rec.record_every,
     });
     let seed = g.seed.unwrap_or(0);
-    let n_threads = threads(a.threads);
+    let n_threads = threads(a.threads)?;
     let mut results = Vec::new();
     for ag in &agents {
         let make_env = |o: usize| {
@@ -258,17 +258,22 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     } else {
         for r in &results {
             println!(
-                "{}: mean success {:.1} % (95 % CI {:.1}-{:.1}), {:.2} steps per episode, {:.1} control steps/s",
+                "{}: mean success {:.1} % (95 % CI {:.1}-{:.1}), {:.2} steps per episode, {:.1} control steps/s, {} physics failures",
                 r.agent,
                 100.0 * r.mean_rate,
                 100.0 * r.ci95.0,
                 100.0 * r.ci95.1,
                 r.mean_steps,
-                r.control_steps_per_s
+                r.control_steps_per_s,
+                r.physics_failures
             );
             for o in &r.objects {
+                let failures = match o.physics_failures {
+                    0 => String::new(),
+                    f => format!("  {f} physics failure{}", if f == 1 { "" } else { "s" }),
+                };
                 println!(
-                    "  {:<22} {:>3}/{:<3} {:>5.0} %  [{:>3.0}, {:>3.0}]",
+                    "  {:<22} {:>3}/{:<3} {:>5.0} %  [{:>3.0}, {:>3.0}]{failures}",
                     o.object,
                     o.successes,
                     o.trials,

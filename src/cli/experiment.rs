@@ -51,8 +51,8 @@ pub fn run(a: ExperimentArgs, g: &Global) -> Result<()> {
             bail!("--budget-minutes must be positive, got {m}");
         }
     }
-    if a.parallel == Some(0) || a.threads == Some(0) {
-        bail!("--parallel and --threads must be at least 1");
+    if a.parallel == Some(0) {
+        bail!("--parallel must be at least 1");
     }
     let grid = grasp::experiment::GridConfig::load(&a.grid)
         .with_context(|| format!("loading grid {}", a.grid.display()))?;
@@ -67,7 +67,7 @@ pub fn run(a: ExperimentArgs, g: &Global) -> Result<()> {
             eprintln!("{line}");
         }
     };
-    let n_threads = threads(a.threads);
+    let n_threads = threads(a.threads)?;
     let mut outcomes = Vec::new();
     if !a.report_only {
         outcomes = run_grid(

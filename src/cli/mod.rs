@@ -112,6 +112,55 @@ pub fn init_logging(g: &Global) {
         .try_init();
 }
 
+/// Makes a closed stdout (`grasp objects list | head -1`) end the process quietly with
+/// status 0, as `rg ... | head` does, instead of the panic of `println!` ("failed printing
+/// to stdout: Broken pipe"). Rust ignores SIGPIPE, so the write fails with `EPIPE` and
+/// `print!` panics with that message; the hook recognises it and exits. Every other panic
+/// goes to the default hook.
+pub fn quiet_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let msg = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or_default();
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(0);
+        }
+        default(info)
+    }));
+}
+
+/// Whether `err` is (caused by) a write into a closed pipe.
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|e| {
+        e.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The error and its causes joined by ": ", each said once: a cause whose text the
+/// message before it already contains (library errors often print their source, e.g.
+/// "cannot read x: No such file or directory (os error 2)") is left out.
+pub fn error_text(err: &anyhow::Error) -> String {
+    let mut out = String::new();
+    let mut prev = String::new();
+    for cause in err.chain() {
+        let msg = cause.to_string();
+        if !prev.is_empty() && prev.contains(&msg) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&msg);
+        prev = msg;
+    }
+    out
+}
+
 /// Runs the chosen subcommand.
 pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     let global = cli.global;
@@ -127,5 +176,29 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Run(a) => run::run(a, &global),
         Command::Calibrate(a) => calibrate::run(a, &global),
         Command::Experiment(a) => experiment::run(a, &global),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_text_says_each_cause_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        let lib = grasp::util::fsx::WriteError {
+            path: "x.json".into(),
+            source: io,
+        };
+        let err = anyhow::Error::new(lib).context("writing the table");
+        assert_eq!(
+            error_text(&err),
+            "writing the table: cannot write x.json: No such file"
+        );
+        let plain = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(error_text(&plain), "outer: inner");
+        assert!(!is_broken_pipe(&plain));
+        let pipe = anyhow::Error::new(std::io::Error::from(std::io::ErrorKind::BrokenPipe));
+        assert!(is_broken_pipe(&pipe.context("printing")));
     }
 }

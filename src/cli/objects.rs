@@ -44,7 +44,7 @@ enum ObjectsCmd {
     Export {
         /// Object name (or a path to a mesh file).
         name: String,
-        /// Output .obj file.
+        /// Output .obj file; `-` writes the OBJ text to stdout.
         #[arg(long)]
         out: PathBuf,
         /// Set to look the name up in.
@@ -160,6 +160,16 @@ pub fn run(args: ObjectsArgs, global: &Global) -> anyhow::Result<()> {
                 "grasp object {} ({}), object frame: metres, z up, origin at the bottom centre",
                 spec.spec.name, spec.spec.kind
             );
+            if out.as_os_str() == "-" {
+                // `--out -`: the OBJ text on stdout, nothing else.
+                use std::io::Write;
+                let mut stdout = std::io::stdout().lock();
+                stdout
+                    .write_all(prepared.mesh.to_obj_string(&comment).as_bytes())
+                    .and_then(|()| stdout.flush())
+                    .context("writing the OBJ to stdout")?;
+                return Ok(());
+            }
             prepared
                 .mesh
                 .write_obj(&out, &comment)

@@ -1,6 +1,6 @@
 //! `grasp pca`: fit hand synergies to a pose dataset and look at them.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use grasp::robot::joints::FINGER_JOINTS;
 use grasp::robot::{Robot, Side};
@@ -89,8 +89,8 @@ pub struct CollectArgs {
     #[arg(long)]
     pub sim_config: Option<PathBuf>,
     /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
-    pub threads: Option<u16>,
+    #[arg(long)]
+    pub threads: Option<usize>,
 }
 
 #[derive(Debug, Args)]
@@ -155,11 +155,10 @@ fn collect(a: CollectArgs, g: &Global) -> Result<()> {
     } else {
         ProgressBar::hidden()
     };
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        builder = builder.num_threads(usize::from(t));
-    }
-    let pool = builder.build().context("cannot start the worker threads")?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(super::rollout::threads(a.threads)?)
+        .build()
+        .context("cannot start the worker threads")?;
     let t0 = std::time::Instant::now();
     let result = pool.install(|| collect::collect(&robot, &cfg, &opts, &|| bar.inc(1)));
     bar.finish_and_clear();
@@ -302,6 +301,17 @@ fn fit(a: FitArgs, g: &Global) -> Result<()> {
     let model = SynergyModel::fit(&data.rows, n)
         .with_context(|| format!("cannot fit synergies to {}", a.dataset.display()))?
         .with_source(a.dataset.display().to_string());
+    if model.rank() < n {
+        bail!(
+            "cannot fit {n} synergies to {}: its postures vary along only {} independent \
+             direction(s) (the other eigenvalues are round-off, below {:e} times the largest); \
+             ask for at most {} with --components",
+            a.dataset.display(),
+            model.rank(),
+            grasp::synergy::pca::RANK_TOLERANCE,
+            model.rank()
+        );
+    }
     model.save(&a.out)?;
 
     let cumulative = model.cumulative_ratio();

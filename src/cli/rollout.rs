@@ -75,14 +75,10 @@ pub fn sim_objects(arg: &str) -> Result<Vec<(String, ObjectSpec)>> {
         .collect()
 }
 
-/// Number of worker threads: the flag or the available cores.
-pub fn threads(flag: Option<usize>) -> usize {
-    flag.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    })
-    .max(1)
+/// Number of worker threads: the `--threads` flag (checked by the one rule of
+/// [`grasp::util::threads`]) or the available cores.
+pub fn threads(flag: Option<usize>) -> Result<usize> {
+    grasp::util::threads::resolve(flag).map_err(|m| anyhow::anyhow!("--threads {m}"))
 }
 
 pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
@@ -115,7 +111,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
         ..EnvConfig::default()
     };
     let seed = g.seed.unwrap_or(0);
-    let n_threads = threads(a.threads).min(a.episodes);
+    let n_threads = threads(a.threads)?.min(a.episodes);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n_threads)
         .build()

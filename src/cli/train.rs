@@ -5,6 +5,8 @@ use clap::Args;
 use grasp::train::{StopReason, TrainConfig, TrainSession};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use super::Global;
 
@@ -12,10 +14,12 @@ use super::Global;
 ///
 /// The run folder (default runs/<name>) receives config.toml, metrics.csv (one row per
 /// update), a TensorBoard event file, checkpoints/latest and checkpoints/best, and
-/// learning_curve.svg. Every file is replaced atomically: after a crash or kill -9 (or
-/// Ctrl-C, which simply kills the process), `--resume` continues from checkpoints/latest,
-/// dropping the metrics rows recorded after it. With checkpoint_every = 1 (the default)
-/// at most one update is lost.
+/// learning_curve.svg. Every file is replaced atomically: after a crash or kill -9,
+/// `--resume` continues from checkpoints/latest, dropping the metrics rows recorded after
+/// it. With checkpoint_every = 1 (the default) at most one update is lost. Ctrl-C (SIGINT)
+/// finishes the update in progress, writes checkpoints/latest and exits with status 130;
+/// a second Ctrl-C exits at once. A folder without a checkpoint (a run killed before its
+/// first one) starts afresh.
 #[derive(Debug, Args)]
 #[command(
     after_help = "Examples:\n  grasp train --config configs/cartpole.toml\n  grasp train --config configs/quick.toml --out runs/quick1 --seed 3\n  grasp train --config configs/gru_m3_pca5.toml --time-budget-minutes 60\n  grasp train --config configs/gru_m3_pca5.toml --resume\n  grasp train --config configs/base.toml --total-timesteps 20000 --num-envs 4 --json\n\nThe global --seed overrides the config's seed."
@@ -78,6 +82,24 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        let quiet = g.quiet;
+        ctrlc::set_handler(move || {
+            if stop.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+            if !quiet {
+                eprintln!(
+                    "\ninterrupted: finishing the update in progress, then writing a \
+                     checkpoint (Ctrl-C again to quit at once)"
+                );
+            }
+        })
+        .context("installing the Ctrl-C handler")?;
+    }
+    session.set_stop_flag(Arc::clone(&stop));
     let start_step = session.trainer().global_step();
     bar.set_position(start_step);
     let summary = session
@@ -106,6 +128,7 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
         let why = match summary.stop {
             StopReason::Completed => "completed",
             StopReason::TimeBudget => "time budget reached",
+            StopReason::Interrupted => "interrupted",
         };
         println!(
             "{why}: {} updates ({} new), {} transitions, {} episodes in {:.1} s; last success \
@@ -120,6 +143,12 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
             fmt(summary.best_score),
             summary.run_dir.display()
         );
+    }
+    if summary.stop == StopReason::Interrupted {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
+        std::process::exit(130);
     }
     Ok(())
 }

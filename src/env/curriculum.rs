@@ -35,6 +35,37 @@ impl Default for CurriculumConfig {
     }
 }
 
+/// Longest success-rate window accepted.
+pub const MAX_WINDOW: usize = 1_000_000;
+
+impl CurriculumConfig {
+    /// Checks the values; `Err` names the field (relative to `[env.curriculum]`) and says
+    /// what is wrong. A window of 0 would never record an outcome and freeze the
+    /// curriculum at its easiest level.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        if self.enabled && !(1..=MAX_WINDOW).contains(&self.window) {
+            return Err((
+                "window",
+                format!(
+                    "{} must be in 1..={MAX_WINDOW} while the curriculum is enabled (0 would \
+                     freeze it at the easiest level)",
+                    self.window
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.fixed_rate) {
+            return Err((
+                "fixed_rate",
+                format!(
+                    "{} must be in [0, 1]",
+                    crate::util::num::short(self.fixed_rate)
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Eq. 6 ranges for a success rate `r_s` in [0, 1]: (`delta_p` in metres, `delta_o` in
 /// radians).
 pub fn ranges(r_s: f64) -> (f64, f64) {
@@ -123,6 +154,28 @@ mod tests {
         let (p, o) = ranges(1.0);
         assert!((p - 0.0144).abs() < 1e-15 && (o - 0.1).abs() < 1e-15);
         assert_eq!(ranges(7.0), ranges(1.0));
+    }
+
+    #[test]
+    fn validation_names_the_field() {
+        let ok = CurriculumConfig::default();
+        assert!(ok.validate().is_ok());
+        let zero = CurriculumConfig {
+            window: 0,
+            ..ok.clone()
+        };
+        assert_eq!(zero.validate().unwrap_err().0, "window");
+        // A disabled curriculum does not use its window.
+        let off = CurriculumConfig {
+            enabled: false,
+            ..zero
+        };
+        assert!(off.validate().is_ok());
+        let rate = CurriculumConfig {
+            fixed_rate: 2.0,
+            ..ok
+        };
+        assert_eq!(rate.validate().unwrap_err().0, "fixed_rate");
     }
 
     #[test]

@@ -58,6 +58,10 @@ pub struct Segment {
     pub len: usize,
 }
 
+/// Longest observation history `h` accepted from a config: the paper uses 3; the policy's
+/// first layer grows with `h` (100000 frames asked for a 2.9 GB matrix).
+pub const MAX_HISTORY: usize = 64;
+
 /// The layout of the stacked observation, so a policy can be built for any modality and
 /// PCA size.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]

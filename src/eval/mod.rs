@@ -40,7 +40,19 @@ pub fn wilson(k: usize, n: usize) -> (f64, f64) {
     let denom = 1.0 + z2 / n;
     let centre = (p + z2 / (2.0 * n)) / denom;
     let half = z * ((p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt()) / denom;
-    ((centre - half).max(0.0), (centre + half).min(1.0))
+    // At k = 0 (k = n) the bound is 0 (1) exactly; the formula leaves round-off there
+    // (5.55e-17).
+    let low = if k == 0 {
+        0.0
+    } else {
+        (centre - half).max(0.0)
+    };
+    let high = if k as f64 == n {
+        1.0
+    } else {
+        (centre + half).min(1.0)
+    };
+    (low, high)
 }
 
 /// A learned policy acting in the grasping MDP: observations are normalised as in
@@ -199,6 +211,9 @@ pub struct AgentResult {
     pub mean_steps: f64,
     /// Control steps per wall second (stage 2 and lift steps of all episodes).
     pub control_steps_per_s: f64,
+    /// Episodes that ended in a physics failure, over all objects (each one a failed
+    /// trial, counted in the success rates).
+    pub physics_failures: usize,
     /// Wall time (s).
     pub wall_s: f64,
     /// Episodes recorded (with `record`), per object then trial.
@@ -206,9 +221,14 @@ pub struct AgentResult {
     pub recordings: Vec<RecordingEntry>,
 }
 
-/// Seed of trial `t` on object `o`: shared by all agents (common random numbers).
-pub fn trial_seed(seed: u64, object: usize, trial: usize) -> u64 {
-    crate::env::api::episode_seed(seed, object, trial as u64)
+/// Seed of trial `trial` on the object named `object`: shared by all agents (common
+/// random numbers), and keyed by the object's name rather than its place in the list, so
+/// a trial has the same start pose in any object list or set that contains the object.
+pub fn trial_seed(seed: u64, object: &str, trial: usize) -> u64 {
+    let mut h = crate::objects::decomp::Fnv128::new();
+    h.write(object.as_bytes());
+    let key = h.finish();
+    crate::env::api::episode_seed(seed, (key ^ (key >> 64)) as u64 as usize, trial as u64)
 }
 
 /// Evaluates `agent` on every object of `make_env`'s set for `trials` trials each, in a
@@ -243,13 +263,13 @@ pub fn evaluate(
                             .map_err(|e| EvalError::Agent(format!("{}: {e}", dir.display())))?,
                         matches!(spec, AgentSpec::Sampled(_)),
                         // A stream of its own per object, apart from every trial's seed.
-                        trial_seed(seed, o, trials),
+                        trial_seed(seed, &names[o], trials),
                     )),
                     None => None,
                 };
                 (0..trials)
                     .map(|t| {
-                        let s = trial_seed(seed, o, t);
+                        let s = trial_seed(seed, &names[o], t);
                         let baseline = match spec {
                             AgentSpec::Baseline1 => Some(false),
                             AgentSpec::Baseline2 => Some(true),
@@ -306,7 +326,15 @@ pub fn evaluate(
         recordings.extend(trials.into_iter().filter_map(|t| t.1));
     }
     let mean_rate = objects.iter().map(|o| o.rate).sum::<f64>() / objects.len().max(1) as f64;
+    let physics_failures = objects.iter().map(|o| o.physics_failures).sum();
+    if physics_failures > 0 {
+        tracing::warn!(
+            "{label}: {physics_failures} of {n_all} episodes ended in a physics failure (a \
+             simulator error or panic; counted as failed trials)"
+        );
+    }
     Ok(AgentResult {
+        physics_failures,
         agent: label,
         mean_rate,
         ci95: wilson(k_all, n_all),
@@ -440,7 +468,8 @@ pub enum EvalError {
 }
 
 /// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
-/// the mean. Rates in percent.
+/// the mean. Rates in percent. When any episode ended in a physics failure, a last column
+/// counts them per agent.
 pub fn markdown_table(results: &[AgentResult]) -> String {
     let Some(first) = results.first() else {
         return String::new();
@@ -449,23 +478,36 @@ pub fn markdown_table(results: &[AgentResult]) -> String {
     for o in &first.objects {
         s.push_str(&format!(" {} |", o.object));
     }
-    s.push_str(" mean | 95 % CI | steps |\n|---|");
+    let failures = results.iter().any(|r| r.physics_failures > 0);
+    s.push_str(" mean | 95 % CI | steps |");
+    if failures {
+        s.push_str(" physics failures |");
+    }
+    s.push_str("\n|---|");
     for _ in &first.objects {
         s.push_str("---|");
     }
-    s.push_str("---|---|---|\n");
+    s.push_str(if failures {
+        "---|---|---|---|\n"
+    } else {
+        "---|---|---|\n"
+    });
     for r in results {
         s.push_str(&format!("| {} |", r.agent));
         for o in &r.objects {
             s.push_str(&format!(" {:.0} |", 100.0 * o.rate));
         }
         s.push_str(&format!(
-            " {:.1} | {:.1}-{:.1} | {:.2} |\n",
+            " {:.1} | {:.1}-{:.1} | {:.2} |",
             100.0 * r.mean_rate,
             100.0 * r.ci95.0,
             100.0 * r.ci95.1,
             r.mean_steps
         ));
+        if failures {
+            s.push_str(&format!(" {} |", r.physics_failures));
+        }
+        s.push('\n');
     }
     s
 }
@@ -510,6 +552,19 @@ mod tests {
         assert_eq!(wilson(0, 0), (0.0, 1.0));
         let (lo, hi) = wilson(10, 10);
         assert!((lo - 0.7225).abs() < 1e-3 && (hi - 1.0).abs() < 1e-12);
+        // The bounds at no and at every success are exact, not round-off (5.55e-17).
+        for n in 1..=300 {
+            assert_eq!(wilson(0, n).0, 0.0, "n = {n}");
+            assert_eq!(wilson(n, n).1, 1.0, "n = {n}");
+        }
+    }
+
+    #[test]
+    fn trial_seeds_follow_the_object_name_not_its_place() {
+        assert_eq!(trial_seed(4, "apple", 2), trial_seed(4, "apple", 2));
+        assert_ne!(trial_seed(4, "apple", 2), trial_seed(4, "can_soup", 2));
+        assert_ne!(trial_seed(4, "apple", 2), trial_seed(4, "apple", 3));
+        assert_ne!(trial_seed(4, "apple", 2), trial_seed(5, "apple", 2));
     }
 
     #[test]
@@ -530,14 +585,22 @@ mod tests {
             ci95: wilson(8, 10),
             mean_steps: 1.0,
             control_steps_per_s: 3.0,
+            physics_failures: 0,
             wall_s: 1.0,
             recordings: Vec::new(),
         };
         let md = markdown_table(std::slice::from_ref(&r));
         assert!(
-            md.contains("| Baseline 1 | 80 | 80.0 | 49.0-94.3 | 1.00 |"),
+            md.contains("| Baseline 1 | 80 | 80.0 | 49.0-94.3 | 1.00 |\n"),
             "{md}"
         );
+        assert!(!md.contains("physics"), "{md}");
+        let mut broken = r.clone();
+        broken.physics_failures = 1;
+        broken.objects[0].physics_failures = 1;
+        let md = markdown_table(std::slice::from_ref(&broken));
+        assert!(md.contains("| steps | physics failures |"), "{md}");
+        assert!(md.contains("| 1.00 | 1 |\n"), "{md}");
         let csv = csv_table(&[r]);
         assert_eq!(csv.lines().count(), 2);
         assert!(csv.contains("Baseline 1,box,10,8,0.8000"));

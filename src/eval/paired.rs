@@ -156,6 +156,7 @@ mod tests {
             ci95: (0.0, 1.0),
             mean_steps: 1.0,
             control_steps_per_s: 1.0,
+            physics_failures: 0,
             wall_s: 1.0,
             recordings: Vec::new(),
         }

@@ -358,8 +358,39 @@ pub struct RecordingEntry {
     pub html: String,
 }
 
+/// The part of a file name that names agent `agent` (a label as [`super::AgentSpec::label`]
+/// gives it): a checkpoint path is shortened to its folder's name, or `<run>_<folder>` for
+/// `<run>/checkpoints/<folder>`, so `/home/me/runs/quick/checkpoints/best` gives
+/// `quick_best`; ` (sampled)` becomes `_sampled`; other labels are kept. File-safe.
+pub fn agent_file_name(agent: &str) -> String {
+    use std::path::Component;
+    let (base, sampled) = match agent.strip_suffix(" (sampled)") {
+        Some(b) => (b, true),
+        None => (agent, false),
+    };
+    let names: Vec<&str> = Path::new(base)
+        .components()
+        .filter_map(|c| match c {
+            Component::Normal(s) => s.to_str(),
+            _ => None,
+        })
+        .collect();
+    let short = match names.as_slice() {
+        [.., run, "checkpoints", folder] => format!("{run}_{folder}"),
+        [.., last] => last.to_string(),
+        [] => base.to_string(),
+    };
+    let short = slug(&short);
+    if sampled {
+        format!("{short}_sampled")
+    } else {
+        short
+    }
+}
+
 /// Writes `rec` as `<stem>.json` and `<stem>.html` into `dir` (atomically, the folder
-/// created when missing), where the stem is `<agent>_<object>_<trial>` made file-safe.
+/// created when missing), where the stem is `<agent>_<object>_<trial>` made file-safe,
+/// the agent as [`agent_file_name`] gives it.
 pub fn write_recording(
     dir: &Path,
     rec: &EpisodeRecording,
@@ -369,7 +400,12 @@ pub fn write_recording(
         path: dir.to_path_buf(),
         source,
     })?;
-    let stem = slug(&format!("{}_{}_{:03}", rec.agent, rec.object, trial));
+    let stem = format!(
+        "{}_{}_{:03}",
+        agent_file_name(&rec.agent),
+        slug(&rec.object),
+        trial
+    );
     let json = format!("{stem}.json");
     let html = format!("{stem}.html");
     write_atomic(&dir.join(&json), serde_json::to_string(rec)?.as_bytes())?;
@@ -454,6 +490,16 @@ mod tests {
     fn slug_and_escapes() {
         assert_eq!(slug("Baseline 2_box/x_001"), "Baseline_2_box_x_001");
         assert_eq!(slug("..."), "episode");
+        assert_eq!(agent_file_name("Baseline 2"), "Baseline_2");
+        assert_eq!(
+            agent_file_name("/home/me/runs/quick/checkpoints/best"),
+            "quick_best"
+        );
+        assert_eq!(
+            agent_file_name("/opt/grasp/assets/policies/quick_gru_m3_pca5 (sampled)"),
+            "quick_gru_m3_pca5_sampled"
+        );
+        assert_eq!(agent_file_name("runs/x/"), "x");
         assert_eq!(
             script_safe(r#"{"a":"</script>"}"#),
             r#"{"a":"\u003c/script>"}"#

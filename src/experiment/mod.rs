@@ -688,6 +688,7 @@ fn execute(
                     stop: match s.stop {
                         StopReason::Completed => "completed".into(),
                         StopReason::TimeBudget => "time_budget".into(),
+                        StopReason::Interrupted => "interrupted".into(),
                     },
                 },
             )

@@ -95,11 +95,119 @@ struct State {
 /// The robot through rosbridge (see the module docs).
 pub struct RosHandArm {
     ws: WebSocket<TcpStream>,
-    cfg: RosConfig,
     t0: Instant,
+    dec: RosDecoder,
+}
+
+/// Decodes the rosbridge messages the server sends into the latest sensor state: what
+/// [`RosHandArm`] does with every message it receives, apart from the connection (so it
+/// can be tested, and fuzzed, on its own). A malformed message is an error naming the
+/// topic and field; other ops and topics are ignored.
+#[derive(Debug, Clone)]
+pub struct RosDecoder {
+    cfg: RosConfig,
     state: State,
     hand_names: Vec<String>,
     arm_names: Vec<String>,
+}
+
+impl RosDecoder {
+    /// A decoder for the topics and joint-name prefixes of `cfg`, with no data yet.
+    pub fn new(cfg: RosConfig) -> Self {
+        RosDecoder {
+            hand_names: HAND_JOINTS
+                .iter()
+                .map(|j| format!("{}{j}", cfg.hand_prefix))
+                .collect(),
+            arm_names: ur10e::JOINT_NAMES
+                .iter()
+                .map(|j| format!("{}{j}", cfg.arm_prefix))
+                .collect(),
+            cfg,
+            state: State::default(),
+        }
+    }
+
+    /// The newest hand joint angles, if a complete `joint_states` message arrived.
+    pub fn hand_q(&self) -> Option<[f64; N_HAND_JOINTS]> {
+        self.state.hand_q
+    }
+
+    /// The newest tactile values, if any arrived.
+    pub fn tactile(&self) -> Option<[f64; N_TACTILE]> {
+        self.state.tactile
+    }
+
+    /// The newest arm joint angles, if any arrived.
+    pub fn arm_q(&self) -> Option<[f64; 6]> {
+        self.state.arm_q
+    }
+
+    /// Handles one message `text` received at backend time `now` (s).
+    pub fn handle(&mut self, text: &str, now: f64) -> Result<(), HwError> {
+        let v: Value = serde_json::from_str(text).map_err(|e| HwError::InvalidReading {
+            field: "rosbridge message".into(),
+            detail: e.to_string(),
+        })?;
+        if v["op"] != "publish" {
+            return Ok(());
+        }
+        let topic = v["topic"].as_str().unwrap_or_default();
+        let msg = &v["msg"];
+        if topic == self.cfg.joint_states_topic {
+            self.joint_states(msg, now)
+        } else if topic == self.cfg.tactile_topic {
+            let field = &self.cfg.tactile_field;
+            let vals = numbers(&msg[field.as_str()], &format!("{topic}.{field}"))?;
+            if vals.len() != N_TACTILE {
+                return Err(HwError::InvalidReading {
+                    field: format!("{topic}.{field}"),
+                    detail: format!("{} values, expected 5 (FF, MF, RF, LF, TH)", vals.len()),
+                });
+            }
+            self.state.tactile = Some(std::array::from_fn(|k| vals[k]));
+            Ok(())
+        } else {
+            Ok(())
+        }
+    }
+
+    fn joint_states(&mut self, msg: &Value, now: f64) -> Result<(), HwError> {
+        let topic = &self.cfg.joint_states_topic;
+        let names: Vec<&str> = msg["name"]
+            .as_array()
+            .map(|a| a.iter().filter_map(Value::as_str).collect())
+            .unwrap_or_default();
+        let pos = numbers(&msg["position"], &format!("{topic}.position"))?;
+        let eff = if msg["effort"].as_array().is_some_and(|a| !a.is_empty()) {
+            numbers(&msg["effort"], &format!("{topic}.effort"))?
+        } else {
+            vec![0.0; names.len()]
+        };
+        if pos.len() != names.len() || eff.len() != names.len() {
+            return Err(HwError::InvalidReading {
+                field: topic.clone(),
+                detail: format!(
+                    "{} names, {} positions, {} efforts",
+                    names.len(),
+                    pos.len(),
+                    eff.len()
+                ),
+            });
+        }
+        let find = |n: &str| names.iter().position(|m| *m == n);
+        let hand: Option<Vec<usize>> = self.hand_names.iter().map(|n| find(n)).collect();
+        if let Some(idx) = hand {
+            self.state.hand_q = Some(std::array::from_fn(|k| pos[idx[k]]));
+            self.state.hand_effort = std::array::from_fn(|k| eff[idx[k]]);
+            self.state.stamp = now;
+        }
+        let arm: Option<Vec<usize>> = self.arm_names.iter().map(|n| find(n)).collect();
+        if let Some(idx) = arm {
+            self.state.arm_q = Some(std::array::from_fn(|k| pos[idx[k]]));
+        }
+        Ok(())
+    }
 }
 
 fn disconnected(e: impl std::fmt::Display) -> HwError {
@@ -144,22 +252,13 @@ impl RosHandArm {
             .map_err(|e| disconnected(format!("websocket handshake with {url} failed: {e}")))?;
         let mut arm = RosHandArm {
             ws,
-            hand_names: HAND_JOINTS
-                .iter()
-                .map(|j| format!("{}{j}", cfg.hand_prefix))
-                .collect(),
-            arm_names: ur10e::JOINT_NAMES
-                .iter()
-                .map(|j| format!("{}{j}", cfg.arm_prefix))
-                .collect(),
-            cfg,
             t0: Instant::now(),
-            state: State::default(),
+            dec: RosDecoder::new(cfg),
         };
         arm.ws
             .get_mut()
             .set_read_timeout(Some(Duration::from_millis(2)))?;
-        let c = arm.cfg.clone();
+        let c = arm.dec.cfg.clone();
         arm.send(json!({"op": "subscribe", "topic": c.joint_states_topic, "type": "sensor_msgs/JointState", "queue_length": 1}))?;
         arm.send(json!({"op": "subscribe", "topic": c.tactile_topic, "type": c.tactile_type, "queue_length": 1}))?;
         arm.send(json!({"op": "advertise", "topic": c.hand_command_topic, "type": "trajectory_msgs/JointTrajectory"}))?;
@@ -169,12 +268,12 @@ impl RosHandArm {
 
     /// The configuration.
     pub fn config(&self) -> &RosConfig {
-        &self.cfg
+        &self.dec.cfg
     }
 
     /// The last measured arm joints, if received.
     pub fn arm_joints(&self) -> Option<[f64; 6]> {
-        self.state.arm_q
+        self.dec.state.arm_q
     }
 
     fn send(&mut self, v: Value) -> Result<(), HwError> {
@@ -187,7 +286,10 @@ impl RosHandArm {
     fn pump(&mut self) -> Result<(), HwError> {
         loop {
             match self.ws.read() {
-                Ok(Message::Text(t)) => self.handle(t.as_str())?,
+                Ok(Message::Text(t)) => {
+                    let now = self.now();
+                    self.dec.handle(t.as_str(), now)?
+                }
                 Ok(Message::Close(_)) => {
                     return Err(disconnected("rosbridge closed the connection"))
                 }
@@ -200,71 +302,6 @@ impl RosHandArm {
                 Err(e) => return Err(disconnected(format!("rosbridge connection lost: {e}"))),
             }
         }
-    }
-
-    fn handle(&mut self, text: &str) -> Result<(), HwError> {
-        let v: Value = serde_json::from_str(text).map_err(|e| HwError::InvalidReading {
-            field: "rosbridge message".into(),
-            detail: e.to_string(),
-        })?;
-        if v["op"] != "publish" {
-            return Ok(());
-        }
-        let topic = v["topic"].as_str().unwrap_or_default();
-        let msg = &v["msg"];
-        if topic == self.cfg.joint_states_topic {
-            self.joint_states(msg)
-        } else if topic == self.cfg.tactile_topic {
-            let field = &self.cfg.tactile_field;
-            let vals = numbers(&msg[field.as_str()], &format!("{topic}.{field}"))?;
-            if vals.len() != N_TACTILE {
-                return Err(HwError::InvalidReading {
-                    field: format!("{topic}.{field}"),
-                    detail: format!("{} values, expected 5 (FF, MF, RF, LF, TH)", vals.len()),
-                });
-            }
-            self.state.tactile = Some(std::array::from_fn(|k| vals[k]));
-            Ok(())
-        } else {
-            Ok(())
-        }
-    }
-
-    fn joint_states(&mut self, msg: &Value) -> Result<(), HwError> {
-        let topic = &self.cfg.joint_states_topic;
-        let names: Vec<&str> = msg["name"]
-            .as_array()
-            .map(|a| a.iter().filter_map(Value::as_str).collect())
-            .unwrap_or_default();
-        let pos = numbers(&msg["position"], &format!("{topic}.position"))?;
-        let eff = if msg["effort"].as_array().is_some_and(|a| !a.is_empty()) {
-            numbers(&msg["effort"], &format!("{topic}.effort"))?
-        } else {
-            vec![0.0; names.len()]
-        };
-        if pos.len() != names.len() || eff.len() != names.len() {
-            return Err(HwError::InvalidReading {
-                field: topic.clone(),
-                detail: format!(
-                    "{} names, {} positions, {} efforts",
-                    names.len(),
-                    pos.len(),
-                    eff.len()
-                ),
-            });
-        }
-        let find = |n: &str| names.iter().position(|m| *m == n);
-        let hand: Option<Vec<usize>> = self.hand_names.iter().map(|n| find(n)).collect();
-        if let Some(idx) = hand {
-            self.state.hand_q = Some(std::array::from_fn(|k| pos[idx[k]]));
-            self.state.hand_effort = std::array::from_fn(|k| eff[idx[k]]);
-            self.state.stamp = self.now();
-        }
-        let arm: Option<Vec<usize>> = self.arm_names.iter().map(|n| find(n)).collect();
-        if let Some(idx) = arm {
-            self.state.arm_q = Some(std::array::from_fn(|k| pos[idx[k]]));
-        }
-        Ok(())
     }
 
     fn trajectory(
@@ -307,7 +344,7 @@ impl Drop for RosHandArm {
         if self.ws.close(None).is_err() {
             return;
         }
-        let end = self.now() + self.cfg.timeout_s;
+        let end = self.now() + self.dec.cfg.timeout_s;
         while self.now() < end {
             match self.ws.read() {
                 Ok(_) => {}
@@ -342,20 +379,20 @@ impl HandArm for RosHandArm {
         let start = self.now();
         loop {
             self.pump()?;
-            if let (Some(q), Some(t)) = (self.state.hand_q, self.state.tactile) {
+            if let (Some(q), Some(t)) = (self.dec.state.hand_q, self.dec.state.tactile) {
                 return Ok(RawSensors {
-                    stamp: self.state.stamp,
+                    stamp: self.dec.state.stamp,
                     joint_angles: q,
                     tactile_raw: t,
-                    tendon_raw: crate::robot::joints::actuator_sums(&self.state.hand_effort),
+                    tendon_raw: crate::robot::joints::actuator_sums(&self.dec.state.hand_effort),
                 });
             }
             let waited = self.now() - start;
-            if waited > self.cfg.timeout_s {
-                let what = if self.state.hand_q.is_none() {
-                    format!("hand joint states on {}", self.cfg.joint_states_topic)
+            if waited > self.dec.cfg.timeout_s {
+                let what = if self.dec.state.hand_q.is_none() {
+                    format!("hand joint states on {}", self.dec.cfg.joint_states_topic)
                 } else {
-                    format!("tactile data on {}", self.cfg.tactile_topic)
+                    format!("tactile data on {}", self.dec.cfg.tactile_topic)
                 };
                 return Err(HwError::Timeout {
                     what,
@@ -373,9 +410,9 @@ impl HandArm for RosHandArm {
             });
         }
         let (topic, names, t) = (
-            self.cfg.hand_command_topic.clone(),
-            self.hand_names.clone(),
-            self.cfg.hand_point_time_s,
+            self.dec.cfg.hand_command_topic.clone(),
+            self.dec.hand_names.clone(),
+            self.dec.cfg.hand_point_time_s,
         );
         self.trajectory(topic, names, targets, t)
     }
@@ -384,14 +421,14 @@ impl HandArm for RosHandArm {
     fn move_arm(&mut self, motion: &ArmMotion) -> Result<(), HwError> {
         motion.validate()?;
         let (q, t) = match *motion {
-            ArmMotion::Joints(q) => (q, self.cfg.arm_motion_time_s),
+            ArmMotion::Joints(q) => (q, self.dec.cfg.arm_motion_time_s),
             ArmMotion::Lift {
                 height_m,
                 duration_s,
             } => {
                 self.pump()?;
-                let q0 = self.state.arm_q.ok_or_else(|| HwError::Timeout {
-                    what: format!("arm joint states on {}", self.cfg.joint_states_topic),
+                let q0 = self.dec.state.arm_q.ok_or_else(|| HwError::Timeout {
+                    what: format!("arm joint states on {}", self.dec.cfg.joint_states_topic),
                     waited_s: 0.0,
                 })?;
                 let up = Isometry3::from_parts(
@@ -405,20 +442,29 @@ impl HandArm for RosHandArm {
                 (q, duration_s)
             }
         };
-        let (topic, names) = (self.cfg.arm_command_topic.clone(), self.arm_names.clone());
+        let (topic, names) = (
+            self.dec.cfg.arm_command_topic.clone(),
+            self.dec.arm_names.clone(),
+        );
         self.trajectory(topic, names, &q, t)?;
         self.pump_for(t)
     }
 
     fn stop(&mut self) -> Result<(), HwError> {
         self.pump()?;
-        if let Some(q) = self.state.hand_q {
-            let (topic, names) = (self.cfg.hand_command_topic.clone(), self.hand_names.clone());
-            self.trajectory(topic, names, &q, self.cfg.hand_point_time_s)?;
+        if let Some(q) = self.dec.state.hand_q {
+            let (topic, names) = (
+                self.dec.cfg.hand_command_topic.clone(),
+                self.dec.hand_names.clone(),
+            );
+            self.trajectory(topic, names, &q, self.dec.cfg.hand_point_time_s)?;
         }
-        if let Some(q) = self.state.arm_q {
-            let (topic, names) = (self.cfg.arm_command_topic.clone(), self.arm_names.clone());
-            self.trajectory(topic, names, &q, self.cfg.hand_point_time_s)?;
+        if let Some(q) = self.dec.state.arm_q {
+            let (topic, names) = (
+                self.dec.cfg.arm_command_topic.clone(),
+                self.dec.arm_names.clone(),
+            );
+            self.trajectory(topic, names, &q, self.dec.cfg.hand_point_time_s)?;
         }
         Ok(())
     }

@@ -26,6 +26,11 @@
 //!
 //! Mass and inertia come from the visual mesh (or the exact primitive), not from the
 //! hulls, whose union slightly overestimates the volume.
+//!
+//! Every hull keeps at most [`MAX_HULL_POINTS`] vertices ([`convex_hull_mesh`]): a dense
+//! scan (a sphere of 180k triangles has a hull of 86k vertices) is thinned by vertex
+//! clustering first, because the contact queries scan a hull's vertices and parry's
+//! convex polyhedron failed (index out of bounds) on such hulls.
 
 pub mod decomp;
 pub mod mesh;
@@ -237,10 +242,84 @@ impl ConvexHull {
     }
 }
 
+/// Most vertices a hull keeps. The shipped objects' hulls have at most 770 vertices
+/// (capsule_pill) and their meshes at most 2,562, so nothing shipped is thinned; a dense
+/// user mesh is ([`thin_points`]).
+pub const MAX_HULL_POINTS: usize = 1024;
+
+/// Input points beyond which the hull is computed from a clustered subset (of at most
+/// this many points), then capped to [`MAX_HULL_POINTS`].
+const MAX_HULL_INPUT: usize = 4 * MAX_HULL_POINTS;
+
 /// The convex hull of `points` as an outward-oriented closed mesh (parry3d's quickhull in
-/// f32); `None` for degenerate input.
+/// f32) with at most [`MAX_HULL_POINTS`] vertices; `None` for degenerate input. More
+/// than 4 x [`MAX_HULL_POINTS`] input points are thinned first, and a hull with more vertices
+/// than the cap is recomputed from its thinned vertices ([`thin_points`]).
 pub fn convex_hull_mesh(points: &[[f64; 3]]) -> Option<TriMesh> {
     if points.len() < 4 || points.iter().any(|p| p.iter().any(|x| !x.is_finite())) {
+        return None;
+    }
+    let mut m = if points.len() > MAX_HULL_INPUT {
+        exact_hull(&thin_points(points, MAX_HULL_INPUT))?
+    } else {
+        exact_hull(points)?
+    };
+    if m.vertices.len() > MAX_HULL_POINTS {
+        // The thinned points are at most the cap, so is their hull.
+        m = exact_hull(&thin_points(&m.vertices, MAX_HULL_POINTS))?;
+    }
+    Some(m)
+}
+
+/// At most `max` of `points` (`max >= 8`), by vertex clustering: the bounding box is cut
+/// into the finest grid of equal cubes that leaves at most `max` cubes occupied, and each
+/// occupied cube keeps its point farthest from the box centre (the first on a tie), so the
+/// hull of the result lies inside the hull of `points`, off by at most a cube's diagonal.
+/// Deterministic, in the order of `points`.
+pub fn thin_points(points: &[[f64; 3]], max: usize) -> Vec<[f64; 3]> {
+    let Some(bb) = Aabb::of_points(points) else {
+        return Vec::new();
+    };
+    if points.len() <= max {
+        return points.to_vec();
+    }
+    let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (bb.min[k] + bb.max[k]));
+    let extent = bb.max_extent().max(f64::MIN_POSITIVE);
+    let cluster = |cells: u32| {
+        let size = extent / cells as f64;
+        let mut best: std::collections::HashMap<[i64; 3], (f64, usize)> =
+            std::collections::HashMap::new();
+        for (i, p) in points.iter().enumerate() {
+            let key: [i64; 3] = std::array::from_fn(|k| ((p[k] - bb.min[k]) / size).floor() as i64);
+            let d: f64 = (0..3).map(|k| (p[k] - centre[k]).powi(2)).sum();
+            let e = best.entry(key).or_insert((d, i));
+            if d > e.0 {
+                *e = (d, i);
+            }
+        }
+        let mut keep: Vec<usize> = best.into_values().map(|(_, i)| i).collect();
+        keep.sort_unstable();
+        keep
+    };
+    // The finest grid (cubes per longest side) whose occupied cubes fit in `max`.
+    let (mut lo, mut hi) = (1u32, 4096u32);
+    let mut keep = cluster(lo);
+    while lo < hi {
+        let mid = lo + (hi - lo).div_ceil(2);
+        let k = cluster(mid);
+        if k.len() <= max {
+            lo = mid;
+            keep = k;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    keep.into_iter().map(|i| points[i]).collect()
+}
+
+/// The hull of `points` without a vertex cap.
+fn exact_hull(points: &[[f64; 3]]) -> Option<TriMesh> {
+    if points.len() < 4 {
         return None;
     }
     let pts: Vec<Vector> = points

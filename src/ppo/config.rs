@@ -2,6 +2,7 @@
 
 use super::PpoError;
 use crate::policy::PolicyConfig;
+use crate::util::num::short;
 use std::path::Path;
 
 /// Every hyperparameter of the learner. Deserialised from TOML with unknown keys rejected;
@@ -126,7 +127,7 @@ impl PpoConfig {
             }
         };
         count("num_envs", self.num_envs, 4096)?;
-        count("env_threads", self.env_threads, 1024)?;
+        crate::util::threads::check(self.env_threads).map_err(|m| bad("env_threads", m))?;
         count("num_steps", self.num_steps, 1 << 20)?;
         count("num_minibatches", self.num_minibatches, 1 << 20)?;
         count("update_epochs", self.update_epochs, 1000)?;
@@ -139,6 +140,7 @@ impl PpoConfig {
                 Ok(())
             } else {
                 let open = if lo_open { "(" } else { "[" };
+                let (v, lo, hi) = (short(v), short(lo), short(hi));
                 Err(bad(field, format!("{v} must be in {open}{lo}, {hi}]")))
             }
         };

@@ -24,7 +24,7 @@ use super::normalize::{RewardScaler, RunningMeanStd};
 use super::optim::{clip_factor, global_grad_norm, Adam};
 use super::PpoError;
 use crate::env::api::{Action, ActionSpec, Env, EpisodeRecord, VecEnv};
-use crate::policy::{build_policy, ActorCritic};
+use crate::policy::{build_policy, ActorCritic, PolicyConfig};
 use candle_core::{Device, Tensor};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -599,8 +599,8 @@ impl Trainer {
         };
         if st.config.policy != self.cfg.policy {
             return Err(mismatch(format!(
-                "it holds policy {:?}, this run uses {:?}",
-                st.config.policy, self.cfg.policy
+                "its network differs from this run's [policy]: {}",
+                policy_differences(&st.config.policy, &self.cfg.policy)
             )));
         }
         if st.obs_dim != self.envs.obs_dim() || st.action_spec != self.envs.action_spec() {
@@ -711,8 +711,50 @@ pub fn explained_variance(y_pred: &[f32], y: &[f32]) -> Option<f64> {
     Some(1.0 - vr / vy)
 }
 
+/// The `[policy]` settings in which `checkpoint` and `run` differ, as
+/// "kind: gru in the checkpoint, mlp here; mlp_hidden: 64 in the checkpoint, 16 here".
+fn policy_differences(checkpoint: &PolicyConfig, run: &PolicyConfig) -> String {
+    let table = |p: &PolicyConfig| match toml::Table::try_from(p) {
+        Ok(t) => t,
+        Err(_) => toml::Table::new(),
+    };
+    let (a, b) = (table(checkpoint), table(run));
+    let diffs: Vec<String> = a
+        .iter()
+        .filter(|(k, v)| b.get(*k) != Some(v))
+        .map(|(k, v)| {
+            let here = b
+                .get(k)
+                .map_or_else(|| "unset".to_string(), |x| x.to_string());
+            format!("{k}: {v} in the checkpoint, {here} here")
+        })
+        .collect();
+    if diffs.is_empty() {
+        "the settings differ beyond their printed precision".into()
+    } else {
+        diffs.join("; ")
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn policy_differences_name_the_fields() {
+        let gru = super::PolicyConfig::default();
+        let mlp = super::PolicyConfig {
+            kind: crate::policy::PolicyKind::Mlp,
+            mlp_hidden: 16,
+            ..gru.clone()
+        };
+        let d = super::policy_differences(&gru, &mlp);
+        assert_eq!(
+            d,
+            "kind: \"gru\" in the checkpoint, \"mlp\" here; mlp_hidden: 64 in the \
+             checkpoint, 16 here"
+        );
+        assert!(!d.contains("PolicyConfig"));
+    }
+
     use super::*;
     use crate::env::cartpole::CartPole;
     use crate::policy::{PolicyConfig, PolicyKind};

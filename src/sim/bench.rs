@@ -93,10 +93,8 @@ pub fn run(
             "envs = {envs}: must be in 1..=1024"
         )));
     }
-    if threads == 0 || threads > 256 {
-        return Err(BenchError::Settings(format!(
-            "threads = {threads}: must be in 1..=256"
-        )));
+    if let Err(m) = crate::util::threads::check(threads) {
+        return Err(BenchError::Settings(format!("threads = {m}")));
     }
     if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3600.0) {
         return Err(BenchError::Settings(format!(

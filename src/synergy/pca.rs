@@ -123,6 +123,11 @@ pub enum SynergyError {
     Write(#[from] WriteError),
 }
 
+/// Relative size below which a covariance eigenvalue counts as round-off (zero variance):
+/// an eigenvalue `lambda_k <= RANK_TOLERANCE * lambda_1` adds no direction the data vary
+/// along. With 22 joints in double precision round-off is near 1e-16 relative.
+pub const RANK_TOLERANCE: f64 = 1e-10;
+
 /// A fitted synergy model: the PCA of a pose dataset.
 ///
 /// Invariants (checked by [`SynergyModel::load`]): `1 <= n <= 22` components, each a unit
@@ -323,6 +328,14 @@ impl SynergyModel {
     /// The `n` components (rows of `C`), unit vectors, by descending eigenvalue.
     pub fn components(&self) -> &[[f64; N_FINGER_JOINTS]] {
         &self.components
+    }
+
+    /// The number of independent directions the data vary along: the eigenvalues above
+    /// [`RANK_TOLERANCE`] times the largest. Components beyond it are round-off (an
+    /// arbitrary direction of zero variance), which `grasp pca fit` refuses to keep.
+    pub fn rank(&self) -> usize {
+        let tolerance = self.eigenvalues[0] * RANK_TOLERANCE;
+        self.eigenvalues.iter().filter(|&&e| e > tolerance).count()
     }
 
     /// All 22 covariance eigenvalues (variances along the principal axes), descending.
@@ -700,6 +713,14 @@ pub(crate) mod tests {
         fix_sign(&mut t);
         assert_eq!(t[2], 0.5);
         assert_eq!(t[7], -0.5);
+    }
+
+    #[test]
+    fn rank_counts_the_directions_with_variance() {
+        // known_rows vary along u and v only: eigenvalues 3..22 are round-off.
+        let m = SynergyModel::fit(&known_rows(), 3).unwrap();
+        assert_eq!(m.rank(), 2);
+        assert!(m.eigenvalues()[2] < 1e-14);
     }
 
     #[test]

@@ -246,7 +246,16 @@ fn load_chain(
         });
     }
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut merged = load_chain(&dir.join(base), depth + 1, seen)?;
+    let base_path = dir.join(base);
+    if let Err(e) = std::fs::metadata(&base_path) {
+        // Name the file that refers to the missing one, not only the missing one.
+        return Err(TrainError::ConfigValue {
+            path: path.to_path_buf(),
+            field: "base".into(),
+            message: format!("cannot read {}: {e}", base_path.display()),
+        });
+    }
+    let mut merged = load_chain(&base_path, depth + 1, seen)?;
     merge_tables(&mut merged, table);
     Ok(merged)
 }
@@ -334,11 +343,7 @@ impl TrainConfig {
 
     /// The environment pool size: `threads`, or the available cores.
     pub fn env_threads(&self) -> usize {
-        self.threads.unwrap_or_else(|| {
-            std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1)
-        })
+        self.threads.unwrap_or_else(crate::util::threads::available)
     }
 
     /// The learner's config: `[ppo]` with the top-level `seed`, `num_envs`,
@@ -397,8 +402,8 @@ impl TrainConfig {
                 return bad("time_budget_minutes", format!("{t} must be positive"));
             }
         }
-        if self.threads == Some(0) {
-            return bad("threads", "must be at least 1".into());
+        if let Some(Err(m)) = self.threads.map(crate::util::threads::check) {
+            return bad("threads", m);
         }
         if self.objects != "primitives" {
             if let Err(e) = crate::objects::sets::resolve_specs(&self.objects) {
@@ -418,6 +423,16 @@ impl TrainConfig {
             return bad("env.cartpole_max_steps", "must be at least 1".into());
         }
         if self.env.kind == EnvKind::Grasp {
+            let max = crate::env::obs::MAX_HISTORY;
+            if self.env.grasp.history > max {
+                return bad(
+                    "env.history",
+                    format!("{} must be in 1..={max}", self.env.grasp.history),
+                );
+            }
+            if let Err((field, message)) = self.env.grasp.curriculum.validate() {
+                return bad(&format!("env.curriculum.{field}"), message);
+            }
             if let Err(e) = self.env.grasp.validate() {
                 return bad("env", e.to_string());
             }
@@ -561,7 +576,10 @@ mod tests {
         assert!(e.contains("line 5") && e.contains("ppo.seed"), "{e}");
         let m = write(dir.path(), "m.toml", "base = \"missing.toml\"\n");
         let e = TrainConfig::load(&m).unwrap_err().to_string();
-        assert!(e.contains("missing.toml"), "{e}");
+        assert!(
+            e.contains("m.toml: `base`") && e.contains("missing.toml"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -575,6 +593,11 @@ mod tests {
             ("time_budget_minutes = -1.0\n", "time_budget_minutes"),
             ("[ppo]\ngamma = 2.0\n", "gamma"),
             ("[env]\nhistory = 0\n", "history"),
+            ("[env]\nhistory = 100000\n", "env.history"),
+            ("[env.curriculum]\nwindow = 0\n", "env.curriculum.window"),
+            ("threads = 0\n", "threads"),
+            ("threads = 100000\n", "threads"),
+            ("[ppo]\nlearning_rate = 1e300\n", "1e300 must be in (0, 1]"),
         ] {
             let e = TrainConfig::parse(p, text).unwrap_err().to_string();
             assert!(e.contains(field) && e.contains("x.toml"), "{text}: {e}");

@@ -119,11 +119,18 @@ pub enum TrainError {
         /// The run folder.
         dir: PathBuf,
     },
-    /// `--resume` found nothing to resume.
-    #[error("cannot resume: no checkpoint at {path}")]
-    NoCheckpoint {
-        /// The checkpoint file looked for.
-        path: PathBuf,
+    /// `--resume` without the metrics file while a best checkpoint exists: the best
+    /// score so far is unknown, so the best checkpoint would be overwritten by a worse one.
+    #[error(
+        "cannot resume: {metrics} is missing, so the best score so far is unknown and {best} \
+         would be overwritten by a worse checkpoint; restore {metrics}, or move {best} away \
+         to resume without it"
+    )]
+    MetricsMissing {
+        /// The metrics file looked for.
+        metrics: PathBuf,
+        /// The best checkpoint folder.
+        best: PathBuf,
     },
     /// The learning-curve plot could not be drawn.
     #[error("cannot draw {path}: {message}")]

@@ -13,7 +13,7 @@ use crate::sim::SimConfig;
 use crate::synergy::SynergyModel;
 use crate::util::fsx::write_atomic;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
@@ -181,6 +181,9 @@ pub enum StopReason {
     Completed,
     /// `time_budget_minutes` ran out.
     TimeBudget,
+    /// The stop flag ([`TrainSession::set_stop_flag`], Ctrl-C in `grasp train`) was
+    /// raised: the update in progress was finished and a checkpoint written.
+    Interrupted,
 }
 
 /// The outcome of [`TrainSession::run`].
@@ -223,12 +226,37 @@ pub struct TrainSession {
     t0_unix: f64,
     best: Option<f64>,
     wall_offset: f64,
+    stop_flag: Option<Arc<AtomicBool>>,
 }
 
 fn now_unix() -> f64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// Removes what a run killed before its first checkpoint left in `dir` (metrics, event
+/// files, plot, best checkpoint), so a fresh start does not mix with it.
+fn discard_unfinished(dir: &Path) -> Result<(), TrainError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| TrainError::Io { path, source }
+    };
+    let rd = std::fs::read_dir(dir).map_err(io(dir))?;
+    for entry in rd.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let stale = name == files::METRICS
+            || name == files::PLOT
+            || (name.starts_with(files::EVENTS_PREFIX) && name.ends_with(files::EVENTS_SUFFIX));
+        if stale && entry.path().is_file() {
+            std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
+        }
+    }
+    let best = best_dir(dir);
+    if best.is_dir() {
+        std::fs::remove_dir_all(&best).map_err(io(&best))?;
+    }
+    Ok(())
 }
 
 /// The existing event file of `dir` and its start time, if any.
@@ -252,21 +280,39 @@ fn find_events(dir: &Path) -> Result<Option<(PathBuf, f64)>, TrainError> {
 
 impl TrainSession {
     /// Prepares run folder `dir` for `cfg`. A new run (`resume = false`) refuses a folder
-    /// that already holds metrics or a checkpoint. With `resume`, the trainer is restored
-    /// from `checkpoints/latest` (its network must match `cfg`; the other settings of `cfg`
+    /// that already holds a checkpoint. With `resume`, the trainer is restored from
+    /// `checkpoints/latest` (its network must match `cfg`; the other settings of `cfg`
     /// apply from now on, so `total_timesteps` can be raised), the metrics rows after the
-    /// checkpoint's update are dropped and the TensorBoard file is rebuilt from the rest.
+    /// checkpoint's update are dropped and the TensorBoard file is rebuilt from the rest;
+    /// without the metrics file it refuses while `checkpoints/best` exists (the best score
+    /// would be lost). A folder without `checkpoints/latest` (a run killed before its
+    /// first checkpoint) starts afresh either way: its metrics, event file and best
+    /// checkpoint are replaced.
     pub fn open(cfg: TrainConfig, dir: &Path, resume: bool) -> Result<TrainSession, TrainError> {
         let latest = latest_dir(dir);
         let ck_file = latest.join(CHECKPOINT_FILE);
         let metrics_path = dir.join(files::METRICS);
-        if resume && !ck_file.exists() {
-            return Err(TrainError::NoCheckpoint { path: ck_file });
-        }
-        if !resume && (ck_file.exists() || metrics_path.exists()) {
+        let has_checkpoint = ck_file.exists();
+        if !resume && has_checkpoint {
             return Err(TrainError::RunExists {
                 dir: dir.to_path_buf(),
             });
+        }
+        if resume && has_checkpoint && !metrics_path.exists() && best_dir(dir).exists() {
+            return Err(TrainError::MetricsMissing {
+                metrics: metrics_path,
+                best: best_dir(dir),
+            });
+        }
+        if resume && !has_checkpoint {
+            tracing::warn!(
+                "{} holds no checkpoint (the run stopped before its first): starting afresh",
+                dir.display()
+            );
+        }
+        let resume = resume && has_checkpoint;
+        if !resume && dir.join(files::CONFIG).is_file() {
+            discard_unfinished(dir)?;
         }
         let (envs, probe, model) = build_envs(&cfg)?;
         let mut trainer = Trainer::new(cfg.ppo_config(), envs)?;
@@ -315,10 +361,24 @@ impl TrainSession {
             events_path,
             t0_unix,
             best,
+            stop_flag: None,
         };
         write_atomic(&dir.join(files::CONFIG), session.config_text.as_bytes())?;
         session.write_logs()?;
         Ok(session)
+    }
+
+    /// Makes [`TrainSession::run`] stop cleanly once `flag` is raised: it finishes the
+    /// update in progress, saves `checkpoints/latest` and returns with
+    /// [`StopReason::Interrupted`].
+    pub fn set_stop_flag(&mut self, flag: Arc<AtomicBool>) {
+        self.stop_flag = Some(flag);
+    }
+
+    fn stop_requested(&self) -> bool {
+        self.stop_flag
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::SeqCst))
     }
 
     /// The configuration.
@@ -418,6 +478,10 @@ impl TrainSession {
         let mut stop = StopReason::Completed;
         let mut saved_at = first;
         while self.trainer.update_index() < planned {
+            if self.stop_requested() {
+                stop = StopReason::Interrupted;
+                break;
+            }
             let m = self.trainer.train_update()?;
             let row = self.row_from(&m, self.wall_offset + start.elapsed().as_secs_f64());
             self.rows.push(row);

@@ -18,18 +18,26 @@ pub struct WriteError {
 /// Writes `bytes` to `path` atomically: the data goes to a temporary file in the same
 /// directory, is flushed to disk, and is then renamed over `path`. Parent directories are
 /// created when missing.
+///
+/// What is at `path` is respected: a symbolic link is followed (the file it points to is
+/// replaced, the link stays), and anything but a regular file (a directory, a device such
+/// as `/dev/full`, a FIFO, a socket) is refused with an error instead of being replaced
+/// by a regular file. A full disk (`ENOSPC`) or any other failed write, flush or rename is
+/// an error; the temporary file is then removed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     let wrap = |source| WriteError {
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
+    let target = regular_target(path).map_err(wrap)?;
+    let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir).map_err(wrap)?;
     let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(wrap)?;
     tmp.write_all(bytes).map_err(wrap)?;
+    tmp.flush().map_err(wrap)?;
     // The temporary file is private (0600); the result is an ordinary file that others
     // may read, like one written by `std::fs::write` under the usual umask.
     #[cfg(unix)]
@@ -40,8 +48,70 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
             .map_err(wrap)?;
     }
     tmp.as_file().sync_all().map_err(wrap)?;
-    tmp.persist(path).map_err(|e| wrap(e.error))?;
+    tmp.persist(&target).map_err(|e| wrap(e.error))?;
     Ok(())
+}
+
+/// The regular file that writing `path` should replace: `path` itself, or the end of its
+/// chain of symbolic links (which may not exist yet). Anything else is an error.
+fn regular_target(path: &Path) -> std::io::Result<PathBuf> {
+    use std::io::{Error, ErrorKind};
+    let mut p = path.to_path_buf();
+    // The kernel's own limit on a chain of links (ELOOP) is 40.
+    for _ in 0..40 {
+        let meta = match std::fs::symlink_metadata(&p) {
+            Ok(m) => m,
+            Err(e) if e.kind() == ErrorKind::NotFound => return Ok(p),
+            Err(e) => return Err(e),
+        };
+        let ft = meta.file_type();
+        if ft.is_file() {
+            return Ok(p);
+        }
+        if !ft.is_symlink() {
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                format!(
+                    "{} is a {}, not a regular file; refusing to replace it",
+                    p.display(),
+                    kind_name(&ft)
+                ),
+            ));
+        }
+        let link = std::fs::read_link(&p)?;
+        p = match p.parent() {
+            Some(parent) if link.is_relative() => parent.join(link),
+            _ => link,
+        };
+    }
+    Err(Error::new(
+        ErrorKind::InvalidInput,
+        "too many levels of symbolic links",
+    ))
+}
+
+fn kind_name(ft: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if ft.is_fifo() {
+            return "FIFO";
+        }
+        if ft.is_char_device() {
+            return "character device";
+        }
+        if ft.is_block_device() {
+            return "block device";
+        }
+        if ft.is_socket() {
+            return "socket";
+        }
+    }
+    if ft.is_dir() {
+        "directory"
+    } else {
+        "special file"
+    }
 }
 
 #[cfg(test)]
@@ -63,5 +133,69 @@ mod tests {
             let mode = std::fs::metadata(&p).unwrap().permissions().mode();
             assert_eq!(mode & 0o777, 0o644);
         }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn symlinks_are_followed_and_special_files_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real.json");
+        let link = dir.path().join("link.json");
+        std::fs::write(&real, b"old").unwrap();
+        std::os::unix::fs::symlink("real.json", &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        // A dangling link creates its target.
+        let dangling = dir.path().join("dangling.json");
+        std::os::unix::fs::symlink("made.json", &dangling).unwrap();
+        write_atomic(&dangling, b"made").unwrap();
+        assert_eq!(
+            std::fs::read(dir.path().join("made.json")).unwrap(),
+            b"made"
+        );
+        // A FIFO and a directory stay what they are.
+        let fifo = dir.path().join("fifo");
+        let st = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap();
+        assert!(st.success());
+        let e = write_atomic(&fifo, b"x").unwrap_err();
+        assert!(e.to_string().contains("FIFO, not a regular file"), "{e}");
+        use std::os::unix::fs::FileTypeExt;
+        assert!(std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo());
+        let sub = dir.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        let e = write_atomic(&sub, b"x").unwrap_err();
+        assert!(e.to_string().contains("directory"), "{e}");
+        // A link to a device is refused too, and nothing is left behind.
+        let dev = dir.path().join("dev.json");
+        std::os::unix::fs::symlink("/dev/null", &dev).unwrap();
+        let e = write_atomic(&dev, b"x").unwrap_err();
+        assert!(e.to_string().contains("character device"), "{e}");
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            [
+                "dangling.json",
+                "dev.json",
+                "fifo",
+                "link.json",
+                "made.json",
+                "real.json",
+                "sub"
+            ]
+        );
     }
 }
