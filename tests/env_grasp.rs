@@ -136,5 +136,8 @@ fn anchoring_on_the_command_accumulates_the_squeeze() {
     };
     let measured = gap(Anchor::Measured);
     let target = gap(Anchor::Target);
-    assert!(target > measured + 0.1, "target {target} vs measured {measured}");
+    assert!(
+        target > measured + 0.1,
+        "target {target} vs measured {measured}"
+    );
 }
