@@ -264,6 +264,15 @@ fn pose_f32(p: &Isometry3<f64>) -> Pose {
     )
 }
 
+/// The multibody whose root link is `root` (the hand's), mutably.
+fn hand_multibody_mut(
+    set: &mut MultibodyJointSet,
+    root: RigidBodyHandle,
+) -> Option<&mut Multibody> {
+    let link = *set.rigid_body_link(root)?;
+    set.get_multibody_mut(link.multibody)
+}
+
 /// Rotation taking the x axis to `axis` (unit).
 fn x_to(axis: &Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::rotation_between(&Vector3::x(), axis).unwrap_or_else(|| {
@@ -737,15 +746,7 @@ impl HandSim {
         let up = x_to(&Vector3::z());
         let f1 = Isometry3::from_parts(root_pose.translation, up);
         let f2 = root_pose.inverse() * f1;
-        let Some(link) = self
-            .sets
-            .multibody_joints
-            .rigid_body_link(self.mb_root)
-            .copied()
-        else {
-            return Err(self.lost());
-        };
-        let Some(mb) = self.sets.multibody_joints.get_multibody_mut(link.multibody) else {
+        let Some(mb) = hand_multibody_mut(&mut self.sets.multibody_joints, self.mb_root) else {
             return Err(self.lost());
         };
         if let Some(l) = mb.link_mut(self.lift_link) {
@@ -837,15 +838,7 @@ impl HandSim {
         if self.cfg.drive != DriveModel::MotorRow {
             return;
         }
-        let Some(link) = self
-            .sets
-            .multibody_joints
-            .rigid_body_link(self.mb_root)
-            .copied()
-        else {
-            return;
-        };
-        let Some(mb) = self.sets.multibody_joints.get_multibody_mut(link.multibody) else {
+        let Some(mb) = hand_multibody_mut(&mut self.sets.multibody_joints, self.mb_root) else {
             return;
         };
         for (n, hj) in self.joints.iter().enumerate() {
@@ -929,15 +922,7 @@ impl HandSim {
             return;
         }
         let (dt, margin) = (self.cfg.dt, self.cfg.limit_margin);
-        let Some(link) = self
-            .sets
-            .multibody_joints
-            .rigid_body_link(self.mb_root)
-            .copied()
-        else {
-            return;
-        };
-        let Some(mb) = self.sets.multibody_joints.get_multibody_mut(link.multibody) else {
+        let Some(mb) = hand_multibody_mut(&mut self.sets.multibody_joints, self.mb_root) else {
             return;
         };
         let lift = self.cfg.motors.lift;
