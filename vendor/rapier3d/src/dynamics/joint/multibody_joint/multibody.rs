@@ -1,6 +1,6 @@
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
 use super::multibody_workspace::MultibodyWorkspace;
-use super::tree_factor::{MassFactor, NO_PARENT, sparse_gemm_tr, sparse_quadform};
+use super::tree_factor::{MassFactor, NO_PARENT, gemm_cols, sparse_gemm_tr, sparse_quadform};
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
 use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
@@ -142,6 +142,8 @@ pub struct Multibody {
     /// ancestors'): `link_dofs[link_dofs_start[i]..link_dofs_start[i + 1]]`.
     link_dofs: Vec<usize>,
     link_dofs_start: Vec<usize>,
+    /// `0..ndofs`: the columns of the products when the links are not in tree order.
+    all_dofs: Vec<usize>,
     /// Whether the links are in topological order, so that the tree-sparse mass-matrix
     /// products and factorisation apply (else the dense ones are used).
     tree_ordered: bool,
@@ -181,6 +183,7 @@ impl Multibody {
             dof_parent: Vec::new(),
             link_dofs: Vec::new(),
             link_dofs_start: Vec::new(),
+            all_dofs: Vec::new(),
             tree_ordered: false,
             root_is_dynamic: false,
             self_contacts_enabled,
@@ -391,6 +394,8 @@ impl Multibody {
         self.dof_parent.resize(self.ndofs, NO_PARENT);
         self.link_dofs.clear();
         self.link_dofs_start.clear();
+        self.all_dofs.clear();
+        self.all_dofs.extend(0..self.ndofs);
         self.tree_ordered = true;
         // The last DoF of each link's chain (its own last DoF, or its nearest ancestor's).
         let mut last = vec![NO_PARENT; nl];
@@ -972,6 +977,14 @@ impl Multibody {
             let rb_j_w = rb_j.fixed_rows::<ANG_DIM>(DIM);
 
             let ndofs = link.joint.ndofs();
+            // Patch: every product below acts column by column, and link i's columns are
+            // zero outside its ancestor chain (its parent's chain is a part of it), so the
+            // products run over that chain only (all DoFs without the tree).
+            let cols: &[usize] = if self.tree_ordered {
+                &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]]
+            } else {
+                &self.all_dofs
+            };
 
             if i != 0 {
                 let parent_id = link.parent_internal_id;
@@ -989,28 +1002,35 @@ impl Multibody {
 
                 // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
                 let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &shift_cross_tr, parent_coriolis_w, 1.0);
+                gemm_cols(coriolis_v, 1.0, &shift_cross_tr, parent_coriolis_w, cols);
 
                 // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
                 let dvel_cross = vect_to_na(
                     rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
                 )
                 .gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &dvel_cross, &parent_j_w, 1.0);
+                gemm_cols(coriolis_v, 1.0, &dvel_cross, &parent_j_w, cols);
 
                 // JDot/u * qdot
-                coriolis_v.gemm(
+                gemm_cols(
+                    coriolis_v,
                     1.0,
                     &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
                     &parent_j_w,
-                    1.0,
+                    cols,
                 );
-                coriolis_v.gemm(1.0, &(parent_w * shift_cross_tr), &parent_j_w, 1.0);
+                gemm_cols(
+                    coriolis_v,
+                    1.0,
+                    &(parent_w * shift_cross_tr),
+                    &parent_j_w,
+                    cols,
+                );
 
                 #[cfg(feature = "dim3")]
                 {
                     let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
-                    coriolis_w.gemm(-1.0, &vel_wrt_joint_w, &parent_j_w, 1.0);
+                    gemm_cols(coriolis_w, -1.0, &vel_wrt_joint_w, &parent_j_w, cols);
                 }
 
                 // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
@@ -1046,18 +1066,19 @@ impl Multibody {
             {
                 // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
                 let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &shift_cross_tr, coriolis_w, 1.0);
+                gemm_cols(coriolis_v, 1.0, &shift_cross_tr, coriolis_w, cols);
 
                 // JDot
                 let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &dvel_cross, &rb_j_w, 1.0);
+                gemm_cols(coriolis_v, 1.0, &dvel_cross, &rb_j_w, cols);
 
                 // JDot/u * qdot
-                coriolis_v.gemm(
+                gemm_cols(
+                    coriolis_v,
                     1.0,
                     &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
                     &rb_j_w,
-                    1.0,
+                    cols,
                 );
             }
 
@@ -1069,11 +1090,12 @@ impl Multibody {
              */
             {
                 let mut i_coriolis_dt_v = self.i_coriolis_dt.fixed_rows_mut::<DIM>(0);
-                i_coriolis_dt_v.copy_from(coriolis_v);
                 let rb_mass_dt = vect_to_na(rb_mass * dt);
-                i_coriolis_dt_v
-                    .column_iter_mut()
-                    .for_each(|mut c| c.component_mul_assign(&rb_mass_dt));
+                for &c in cols {
+                    for r in 0..DIM {
+                        i_coriolis_dt_v[(r, c)] = coriolis_v[(r, c)] * rb_mass_dt[r];
+                    }
+                }
             }
 
             #[cfg(feature = "dim2")]
@@ -1085,16 +1107,16 @@ impl Multibody {
             #[cfg(feature = "dim3")]
             {
                 let mut i_coriolis_dt_w = self.i_coriolis_dt.fixed_rows_mut::<ANG_DIM>(DIM);
-                i_coriolis_dt_w.gemm(dt, &mat_to_na(rb_inertia), coriolis_w, 0.0);
+                let inertia = mat_to_na(rb_inertia);
+                for &c in cols {
+                    for r in 0..ANG_DIM {
+                        i_coriolis_dt_w[(r, c)] = 0.0;
+                    }
+                }
+                gemm_cols(&mut i_coriolis_dt_w, dt, &inertia, coriolis_w, cols);
             }
 
-            if self.tree_ordered {
-                let cols = &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]];
-                sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
-            } else {
-                self.acc_augmented_mass
-                    .gemm_tr(1.0, rb_j, &self.i_coriolis_dt, 1.0);
-            }
+            sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
         }
 
         /*

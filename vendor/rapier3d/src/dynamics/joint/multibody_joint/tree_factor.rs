@@ -178,6 +178,33 @@ pub fn sparse_quadform<C: Dim, S>(
     }
 }
 
+/// `out[:, c] += alpha · a · b[:, c]` for each column `c` in `cols`, the other columns
+/// left as they are: a small dense matrix times a Jacobian-shaped matrix that is zero
+/// outside `cols` (the Coriolis terms of a link, over its ancestor chain).
+pub fn gemm_cols<R1, C1, SO, SA, SB>(
+    out: &mut Matrix<Real, R1, Dyn, SO>,
+    alpha: Real,
+    a: &Matrix<Real, R1, C1, SA>,
+    b: &Matrix<Real, C1, Dyn, SB>,
+    cols: &[usize],
+) where
+    R1: Dim,
+    C1: Dim,
+    SO: StorageMut<Real, R1, Dyn>,
+    SA: na::Storage<Real, R1, C1>,
+    SB: na::Storage<Real, C1, Dyn>,
+{
+    for &c in cols {
+        for r in 0..a.nrows() {
+            let mut s = 0.0;
+            for k in 0..a.ncols() {
+                s += a[(r, k)] * b[(k, c)];
+            }
+            out[(r, c)] += alpha * s;
+        }
+    }
+}
+
 /// `out[a][b] += Σ_r lhs[r][a] rhs[r][b]` over the columns `cols` only: `lhsᵀ rhs` for
 /// two Jacobian-shaped matrices that are zero outside `cols`.
 pub fn sparse_gemm_tr<R: Dim, C: Dim, S1, S2>(
@@ -200,6 +227,22 @@ pub fn sparse_gemm_tr<R: Dim, C: Dim, S1, S2>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gemm_cols_matches_gemm_on_the_listed_columns() {
+        let a = na::Matrix3::new(1.0, 2.0, 0.5, -1.0, 0.0, 3.0, 2.0, 1.0, -2.0);
+        let b = DMatrix::<Real>::from_fn(3, 5, |r, c| (r * 5 + c) as Real * 0.1 - 0.4);
+        let mut full = DMatrix::<Real>::from_element(3, 5, 1.0);
+        full.gemm(0.5, &a, &b, 1.0);
+        let mut part = DMatrix::<Real>::from_element(3, 5, 1.0);
+        gemm_cols(&mut part, 0.5, &a, &b, &[0, 3]);
+        for c in 0..5 {
+            for r in 0..3 {
+                let want = if c == 0 || c == 3 { full[(r, c)] } else { 1.0 };
+                assert!((part[(r, c)] - want).abs() < 1e-6, "({r}, {c})");
+            }
+        }
+    }
 
     /// A tree of 5 DoFs: 0 <- 1 <- 2 and 0 <- 3 <- 4 (two "fingers" on one root DoF).
     fn tree() -> Vec<usize> {
