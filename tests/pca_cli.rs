@@ -70,6 +70,11 @@ fn fit_writes_a_model_and_prints_the_table() {
         "cumulative ratio must reach 1:\n{out}"
     );
     assert!(stderr(&o).contains("ignored column(s)") && stderr(&o).contains("object"));
+    assert!(
+        out.contains("variance of each joint explained by the 3 kept components")
+            && out.contains("THJ5"),
+        "{out}"
+    );
     let m = grasp::synergy::SynergyModel::load(&model).unwrap();
     assert_eq!(m.n_components(), 3);
     assert_eq!(m.n_samples(), 40);
@@ -101,6 +106,11 @@ fn fit_json_parses() {
     assert!(e1 >= e2 && e2 > 0.0);
     assert_eq!(rows[4]["kept"], true);
     assert_eq!(rows[5]["kept"], false);
+    let per_joint = v["per_joint_explained"].as_object().unwrap();
+    assert_eq!(per_joint.len(), 22);
+    assert!(per_joint
+        .values()
+        .all(|x| (0.0..=1.0 + 1e-9).contains(&x.as_f64().unwrap())));
     assert!(model.exists());
 }
 

@@ -128,6 +128,10 @@ fn eval_records_the_same_outcomes_as_without() {
     let a: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
     let b: serde_json::Value = serde_json::from_slice(&recorded.stdout).unwrap();
     assert_eq!(a[0]["objects"], b[0]["objects"]);
+    assert_eq!(a[0]["lifts"], b[0]["lifts"]);
+    // Baseline 2 always lifts; its lift diagnostics are in the JSON.
+    assert_eq!(a[0]["lifts"]["lifted"], 1);
+    assert!(a[0]["lifts"]["mean_grip_effort"].as_f64().unwrap() >= 0.0);
     assert_eq!(b[0]["recordings"].as_array().unwrap().len(), 1);
     let files = recordings(&rec);
     assert_eq!(files.len(), 1);

@@ -29,6 +29,9 @@ fn closed_hand_lifts_a_box_and_a_slippery_box_drops() {
     assert!(lift.failure.is_none(), "{lift:?}");
     assert!(lift.success, "{lift:?}");
     assert!(lift.object_lowest_z > 0.10, "{lift:?}");
+    // The fingers squeeze through the lift: blocked joints push with a good part of
+    // their effort limits (2 N m each).
+    assert!(lift.grip_effort > 2.0, "{lift:?}");
 
     let slippery = ObjectSpec::cuboid([0.025, 0.025, 0.04], 0.1, 0.05);
     sim.set_object(slippery.clone()).unwrap();
@@ -85,6 +88,8 @@ fn open_hand_never_lifts_the_box() {
     let lift = r.lift.unwrap();
     assert!(!lift.success, "{lift:?}");
     assert!(lift.object_lowest_z < 0.01, "{lift:?}");
+    // An open hand holds its posture against gravity only: little grip.
+    assert!(lift.grip_effort < 1.0, "{lift:?}");
 }
 
 #[test]

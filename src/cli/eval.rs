@@ -248,10 +248,12 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
         write_atomic(p, csv_table(&results).as_bytes())?;
     }
     let pairs = paired_lines(&paired_with_first(&results));
+    let lift_lines: String = results.iter().map(lift_line).collect();
     if g.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     } else if a.markdown {
         print!("{}", markdown_table(&results));
+        print!("\n{lift_lines}");
         if !pairs.is_empty() {
             print!("\n{pairs}");
         }
@@ -283,7 +285,22 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
                 );
             }
         }
-        print!("{pairs}");
+        print!("{lift_lines}{pairs}");
     }
     Ok(())
+}
+
+/// One line on how an agent's lifts were made: thumb contact and grip.
+fn lift_line(r: &grasp::eval::AgentResult) -> String {
+    let l = &r.lifts;
+    format!(
+        "{}: {} lifts, thumb touching at {:.1} % of them; grip through the lift {:.2} N m \
+         (held {:.2}, dropped {:.2})\n",
+        r.agent,
+        l.lifted,
+        100.0 * l.thumb_contact_rate,
+        l.mean_grip_effort,
+        l.mean_grip_held,
+        l.mean_grip_dropped
+    )
 }

@@ -315,6 +315,7 @@ fn fit(a: FitArgs, g: &Global) -> Result<()> {
     model.save(&a.out)?;
 
     let cumulative = model.cumulative_ratio();
+    let per_joint = model.per_joint_explained(&data.rows);
     if g.json {
         let rows: Vec<_> = (0..model.eigenvalues().len())
             .map(|k| {
@@ -334,6 +335,11 @@ fn fit(a: FitArgs, g: &Global) -> Result<()> {
             "n_components": n,
             "ignored_columns": data.extras,
             "components": rows,
+            "per_joint_explained": FINGER_JOINTS
+                .iter()
+                .zip(&per_joint)
+                .map(|(j, v)| (j.to_string(), serde_json::json!(v)))
+                .collect::<serde_json::Map<_, _>>(),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -358,5 +364,14 @@ fn fit(a: FitArgs, g: &Global) -> Result<()> {
         println!("{:>8}{mark}  {e:>12.5e}  {r:>9.5}  {c:>10.5}", k + 1);
     }
     println!("(* kept in the model)");
+    println!("variance of each joint explained by the {n} kept components (%):");
+    for (names, values) in FINGER_JOINTS.chunks(6).zip(per_joint.chunks(6)) {
+        let line: Vec<String> = names
+            .iter()
+            .zip(values)
+            .map(|(j, v)| format!("{j:>5} {:>5.1}", 100.0 * v))
+            .collect();
+        println!("  {}", line.join("  "));
+    }
     Ok(())
 }

@@ -30,7 +30,7 @@ use super::curriculum::{Curriculum, CurriculumConfig};
 use super::obs::{FrameStack, Modality, ObsLayout};
 use super::reward;
 use crate::robot::{Posture, Robot};
-use crate::sim::{script, HandSim, ObjectSpec, Scene, SimConfig, SimError};
+use crate::sim::{script, HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig, SimError};
 use crate::synergy::SynergyModel;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -192,6 +192,11 @@ pub struct EpisodeSummary {
     pub physics_failure: bool,
     /// Stage 1 ended on a fingertip contact (false: trajectory T ended first).
     pub touched_in_stage1: bool,
+    /// The thumb's tactile bit when the lift began (false when the episode did not lift).
+    pub thumb_contact_at_lift: bool,
+    /// The grip held through the lift: the 22 finger joints' absolute PD efforts summed
+    /// and averaged over the lift (N m; 0 when the episode did not lift).
+    pub grip_effort: f64,
 }
 
 /// The grasping environment for one simulated hand.
@@ -215,6 +220,9 @@ pub struct GraspEnv {
     steps: usize,
     episode_return: f64,
     touched_in_stage1: bool,
+    /// (thumb tactile bit at the lift's start, grip effort through the lift) of the
+    /// episode's lift, once it lifted.
+    lift_grip: Option<(bool, f64)>,
     last: Option<EpisodeSummary>,
     done: bool,
 }
@@ -260,6 +268,7 @@ impl GraspEnv {
             steps: 0,
             episode_return: 0.0,
             touched_in_stage1: false,
+            lift_grip: None,
             last: None,
             done: true,
         })
@@ -330,6 +339,7 @@ impl GraspEnv {
         self.steps = 0;
         self.episode_return = 0.0;
         self.touched_in_stage1 = false;
+        self.lift_grip = None;
         self.done = false;
         Ok(())
     }
@@ -388,6 +398,8 @@ impl GraspEnv {
             lifted,
             physics_failure,
             touched_in_stage1: self.touched_in_stage1,
+            thumb_contact_at_lift: self.lift_grip.is_some_and(|g| g.0),
+            grip_effort: self.lift_grip.map_or(0.0, |g| g.1),
         });
         self.done = true;
     }
@@ -406,9 +418,18 @@ impl GraspEnv {
         }
     }
 
+    /// The simulator's lift, with the thumb's contact at its start and the grip held
+    /// through it kept for the episode's summary.
+    fn lift_and_judge(&mut self) -> LiftOutcome {
+        let thumb = self.sim.sensors().tactile[4] == 1;
+        let out = self.sim.lift_and_judge();
+        self.lift_grip = Some((thumb, out.grip_effort));
+        out
+    }
+
     /// Lifts, judges and ends the episode (the final step of eq. 4).
     fn lift(&mut self) -> Step {
-        let out = self.sim.lift_and_judge();
+        let out = self.lift_and_judge();
         let failure = out.failure.is_some();
         let r = if out.success { 1.0 } else { 0.0 };
         self.episode_return += r;
@@ -472,7 +493,7 @@ impl GraspEnv {
         if !ok {
             self.finish(false, false, true);
         } else {
-            let out = self.sim.lift_and_judge();
+            let out = self.lift_and_judge();
             self.steps = 1;
             self.episode_return = f64::from(u8::from(out.success));
             self.finish(out.success, true, out.failure.is_some());

@@ -214,11 +214,53 @@ pub struct AgentResult {
     /// Episodes that ended in a physics failure, over all objects (each one a failed
     /// trial, counted in the success rates).
     pub physics_failures: usize,
+    /// How the lifts were made: thumb contact and grip, over every episode that lifted.
+    pub lifts: LiftStats,
     /// Wall time (s).
     pub wall_s: f64,
     /// Episodes recorded (with `record`), per object then trial.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub recordings: Vec<RecordingEntry>,
+}
+
+/// How an agent's lifts were made, over the episodes that lifted: the learned-grasp
+/// diagnostics of the thumb's opposition and of the grip held through the lift.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct LiftStats {
+    /// Episodes that lifted.
+    pub lifted: usize,
+    /// Share of those whose thumb tip touched the object when the lift began.
+    pub thumb_contact_rate: f64,
+    /// Mean grip through the lift (the 22 finger joints' absolute efforts summed, N m).
+    pub mean_grip_effort: f64,
+    /// Mean grip of the lifts that held the object, and of those that did not (N m; 0
+    /// when there were none).
+    pub mean_grip_held: f64,
+    /// See `mean_grip_held`.
+    pub mean_grip_dropped: f64,
+}
+
+impl LiftStats {
+    /// The statistics of `episodes` (those that did not lift are left out).
+    pub fn of<'a>(episodes: impl IntoIterator<Item = &'a EpisodeSummary>) -> LiftStats {
+        let lifted: Vec<&EpisodeSummary> = episodes.into_iter().filter(|e| e.lifted).collect();
+        let mean = |f: &dyn Fn(&EpisodeSummary) -> bool| {
+            let xs: Vec<f64> = lifted
+                .iter()
+                .filter(|e| f(e))
+                .map(|e| e.grip_effort)
+                .collect();
+            xs.iter().sum::<f64>() / xs.len().max(1) as f64
+        };
+        LiftStats {
+            lifted: lifted.len(),
+            thumb_contact_rate: lifted.iter().filter(|e| e.thumb_contact_at_lift).count() as f64
+                / lifted.len().max(1) as f64,
+            mean_grip_effort: mean(&|_| true),
+            mean_grip_held: mean(&|e| e.success),
+            mean_grip_dropped: mean(&|e| !e.success),
+        }
+    }
 }
 
 /// Seed of trial `trial` on the object named `object`: shared by all agents (common
@@ -304,6 +346,7 @@ pub fn evaluate(
     let wall_s = start.elapsed().as_secs_f64();
     let mut objects = Vec::new();
     let mut recordings = Vec::new();
+    let lifts = LiftStats::of(per_object.iter().flatten().map(|t| &t.0));
     let (mut k_all, mut n_all, mut steps_all) = (0, 0, 0usize);
     for (name, trials) in names.iter().zip(per_object) {
         let eps: Vec<&EpisodeSummary> = trials.iter().map(|t| &t.0).collect();
@@ -335,6 +378,7 @@ pub fn evaluate(
     }
     Ok(AgentResult {
         physics_failures,
+        lifts,
         agent: label,
         mean_rate,
         ci95: wilson(k_all, n_all),
@@ -560,6 +604,36 @@ mod tests {
     }
 
     #[test]
+    fn lift_stats_hand_computed() {
+        let ep = |lifted, success, thumb, grip| EpisodeSummary {
+            object: "box".into(),
+            success,
+            steps: 3,
+            episode_return: 0.0,
+            lifted,
+            physics_failure: false,
+            touched_in_stage1: true,
+            thumb_contact_at_lift: thumb,
+            grip_effort: grip,
+        };
+        // Three lifts (2 held with grips 4 and 2, 1 dropped with 1), thumb on 2 of them;
+        // the episode that never lifted is left out.
+        let eps = [
+            ep(true, true, true, 4.0),
+            ep(true, true, false, 2.0),
+            ep(true, false, true, 1.0),
+            ep(false, false, true, 9.0),
+        ];
+        let s = LiftStats::of(&eps);
+        assert_eq!(s.lifted, 3);
+        assert!((s.thumb_contact_rate - 2.0 / 3.0).abs() < 1e-12);
+        assert!((s.mean_grip_effort - 7.0 / 3.0).abs() < 1e-12);
+        assert!((s.mean_grip_held - 3.0).abs() < 1e-12);
+        assert!((s.mean_grip_dropped - 1.0).abs() < 1e-12);
+        assert_eq!(LiftStats::of(&[]), LiftStats::default());
+    }
+
+    #[test]
     fn trial_seeds_follow_the_object_name_not_its_place() {
         assert_eq!(trial_seed(4, "apple", 2), trial_seed(4, "apple", 2));
         assert_ne!(trial_seed(4, "apple", 2), trial_seed(4, "can_soup", 2));
@@ -586,6 +660,7 @@ mod tests {
             mean_steps: 1.0,
             control_steps_per_s: 3.0,
             physics_failures: 0,
+            lifts: LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),
         };

@@ -157,6 +157,7 @@ mod tests {
             mean_steps: 1.0,
             control_steps_per_s: 1.0,
             physics_failures: 0,
+            lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),
         }

@@ -213,6 +213,9 @@ pub struct LiftOutcome {
     pub object_lowest_z: f64,
     /// Whether the object touches the hand at the end.
     pub in_contact: bool,
+    /// The grip the fingers held through the lift: the sum over the 22 finger joints of
+    /// the absolute PD effort (N m), averaged over the lift's physics steps.
+    pub grip_effort: f64,
     /// Set when the physics broke during the episode.
     pub failure: Option<PhysicsFailure>,
 }
@@ -1241,6 +1244,7 @@ impl HandSim {
         let l = self.cfg.lift;
         let ramp = (l.ramp_time / self.cfg.dt).round().max(1.0) as usize;
         let hold = (l.hold_time / self.cfg.dt).round() as usize;
+        let (mut grip_sum, mut grip_steps) = (0.0, 0usize);
         for k in 0..ramp + hold {
             if self.failure.is_some() {
                 break;
@@ -1249,6 +1253,8 @@ impl HandSim {
             self.lift_target = l.height * s * s * (3.0 - 2.0 * s);
             self.apply_targets();
             self.step_physics();
+            grip_sum += finger_grip(&self.joint_efforts());
+            grip_steps += 1;
             if l.stop_when_dropped && self.dropped() {
                 break;
             }
@@ -1260,9 +1266,16 @@ impl HandSim {
             success: failure.is_none() && lowest >= l.success_height && in_contact,
             object_lowest_z: lowest,
             in_contact,
+            grip_effort: grip_sum / grip_steps.max(1) as f64,
             failure,
         }
     }
+}
+
+/// The grip of a hand posture's efforts (24 hand joints, paper order: the two wrist
+/// joints first): the sum of the 22 finger joints' absolute efforts (N m).
+pub fn finger_grip(effort: &[f64; 24]) -> f64 {
+    effort[2..].iter().map(|e| e.abs()).sum()
 }
 
 #[cfg(test)]

@@ -348,6 +348,44 @@ impl SynergyModel {
         &self.explained_variance_ratio
     }
 
+    /// Per joint, the share of its variance over `data` that the model's components
+    /// explain: `1 - var(r_j) / var(x_j)`, where `r = (x - mean) - Cᵀ C (x - mean)` is
+    /// what is left after projecting onto the span and back. A joint that does not vary
+    /// in `data` counts as fully explained (1). Reveals joints the first synergies barely
+    /// move (the thumb, say), which the total ratio hides.
+    pub fn per_joint_explained(&self, data: &[[f64; N_FINGER_JOINTS]]) -> [f64; N_FINGER_JOINTS] {
+        const D: usize = N_FINGER_JOINTS;
+        let m = data.len() as f64;
+        let mut mean_x = [0.0; D];
+        for row in data {
+            for j in 0..D {
+                mean_x[j] += row[j] / m;
+            }
+        }
+        let (mut var_x, mut var_r) = ([0.0; D], [0.0; D]);
+        for row in data {
+            let c: [f64; D] = std::array::from_fn(|j| row[j] - self.mean[j]);
+            let mut back = [0.0; D];
+            for comp in &self.components {
+                let e: f64 = comp.iter().zip(&c).map(|(a, b)| a * b).sum();
+                for j in 0..D {
+                    back[j] += e * comp[j];
+                }
+            }
+            for j in 0..D {
+                var_x[j] += (row[j] - mean_x[j]).powi(2);
+                var_r[j] += (c[j] - back[j]).powi(2);
+            }
+        }
+        std::array::from_fn(|j| {
+            if var_x[j] <= RANK_TOLERANCE * var_x.iter().cloned().fold(0.0, f64::max) {
+                1.0
+            } else {
+                1.0 - var_r[j] / var_x[j]
+            }
+        })
+    }
+
     /// Cumulative explained variance ratios: entry k is the sum of ratios 0..=k.
     pub fn cumulative_ratio(&self) -> [f64; N_FINGER_JOINTS] {
         let mut out = [0.0; N_FINGER_JOINTS];
@@ -625,6 +663,33 @@ pub(crate) mod tests {
         assert_relative_eq!(model.projection_max()[1], 0.1, epsilon = 1e-12);
         assert_eq!(model.n_samples(), 4);
         assert_eq!(model.n_components(), 3);
+    }
+
+    #[test]
+    fn per_joint_explained_hand_computed() {
+        // Joint 0 takes -2 or 2 and joint 1 takes -1 or 1, independently (variances 4 and
+        // 1), the rest stay at 0.3: the first component is joint 0's axis, so it explains
+        // all of joint 0 and none of joint 1; two components explain both. Joints that do
+        // not vary count as explained.
+        let rows: Vec<[f64; 22]> = [(-2.0, -1.0), (-2.0, 1.0), (2.0, -1.0), (2.0, 1.0)]
+            .iter()
+            .map(|&(a, b)| {
+                let mut r = [0.3; 22];
+                r[0] = a;
+                r[1] = b;
+                r
+            })
+            .collect();
+        let one = SynergyModel::fit(&rows, 1)
+            .unwrap()
+            .per_joint_explained(&rows);
+        assert!((one[0] - 1.0).abs() < 1e-12, "{one:?}");
+        assert!(one[1].abs() < 1e-12, "{one:?}");
+        assert!(one[2..].iter().all(|&v| v == 1.0), "{one:?}");
+        let two = SynergyModel::fit(&rows, 2)
+            .unwrap()
+            .per_joint_explained(&rows);
+        assert!(two.iter().all(|&v| (v - 1.0).abs() < 1e-12), "{two:?}");
     }
 
     #[test]
