@@ -231,10 +231,10 @@ mod tests {
     #[test]
     fn gemm_cols_matches_gemm_on_the_listed_columns() {
         let a = na::Matrix3::new(1.0, 2.0, 0.5, -1.0, 0.0, 3.0, 2.0, 1.0, -2.0);
-        let b = DMatrix::<Real>::from_fn(3, 5, |r, c| (r * 5 + c) as Real * 0.1 - 0.4);
-        let mut full = DMatrix::<Real>::from_element(3, 5, 1.0);
+        let b = na::Matrix3xX::<Real>::from_fn(5, |r, c| (r * 5 + c) as Real * 0.1 - 0.4);
+        let mut full = na::Matrix3xX::<Real>::from_element(5, 1.0);
         full.gemm(0.5, &a, &b, 1.0);
-        let mut part = DMatrix::<Real>::from_element(3, 5, 1.0);
+        let mut part = na::Matrix3xX::<Real>::from_element(5, 1.0);
         gemm_cols(&mut part, 0.5, &a, &b, &[0, 3]);
         for c in 0..5 {
             for r in 0..3 {
