@@ -377,8 +377,9 @@ impl SynergyModel {
                 var_r[j] += (c[j] - back[j]).powi(2);
             }
         }
+        let still = RANK_TOLERANCE * var_x.iter().cloned().fold(0.0, f64::max);
         std::array::from_fn(|j| {
-            if var_x[j] <= RANK_TOLERANCE * var_x.iter().cloned().fold(0.0, f64::max) {
+            if var_x[j] <= still {
                 1.0
             } else {
                 1.0 - var_r[j] / var_x[j]

@@ -909,6 +909,15 @@ impl Multibody {
             let rb_mass = rb.mprops.effective_mass();
             let rb_inertia = rb.mprops.effective_angular_inertia().into_matrix();
             let body_jacobian = &self.body_jacobians[i];
+            // Patch: link i's body Jacobian, and with it every product below (they act
+            // column by column), is zero outside its ancestor chain (its parent's chain is
+            // a part of it): the products run over that chain only (over all DoFs when the
+            // links are not in tree order).
+            let cols: &[usize] = if self.tree_ordered {
+                &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]]
+            } else {
+                &self.all_dofs
+            };
 
             // NOTE: the mass matrix index reordering operates on the assumption that the assembly
             //       ids are traversed in order. This assert is here to ensure the assumption always
@@ -947,26 +956,18 @@ impl Multibody {
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
-            if self.tree_ordered {
-                let cols = &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]];
-                sparse_quadform(
-                    &mut self.augmented_mass,
-                    &rb_mass_matrix_wo_gyro,
-                    body_jacobian,
-                    cols,
-                );
-                sparse_quadform(
-                    &mut self.acc_augmented_mass,
-                    &rb_mass_matrix,
-                    body_jacobian,
-                    cols,
-                );
-            } else {
-                self.augmented_mass
-                    .quadform(1.0, &rb_mass_matrix_wo_gyro, body_jacobian, 1.0);
-                self.acc_augmented_mass
-                    .quadform(1.0, &rb_mass_matrix, body_jacobian, 1.0);
-            }
+            sparse_quadform(
+                &mut self.augmented_mass,
+                &rb_mass_matrix_wo_gyro,
+                body_jacobian,
+                cols,
+            );
+            sparse_quadform(
+                &mut self.acc_augmented_mass,
+                &rb_mass_matrix,
+                body_jacobian,
+                cols,
+            );
 
             /*
              *
@@ -977,14 +978,6 @@ impl Multibody {
             let rb_j_w = rb_j.fixed_rows::<ANG_DIM>(DIM);
 
             let ndofs = link.joint.ndofs();
-            // Patch: every product below acts column by column, and link i's columns are
-            // zero outside its ancestor chain (its parent's chain is a part of it), so the
-            // products run over that chain only (all DoFs without the tree).
-            let cols: &[usize] = if self.tree_ordered {
-                &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]]
-            } else {
-                &self.all_dofs
-            };
 
             if i != 0 {
                 let parent_id = link.parent_internal_id;
