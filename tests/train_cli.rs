@@ -311,7 +311,10 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 12);
+    assert_eq!(n, 13);
+    let stream = TrainConfig::load(&dir.join("stream.toml")).unwrap();
+    assert_eq!(stream.objects, "procedural");
+    assert!(stream.env.grasp.randomization.enabled);
     let base = TrainConfig::load(&dir.join("base.toml")).unwrap();
     let mut dflt = TrainConfig::load(&dir.join("gru_m3_pca5.toml")).unwrap();
     assert_eq!(dflt.name, base.name);

@@ -81,7 +81,8 @@ pub struct BenchEnvArgs {
     /// Measurements per config (medians are reported).
     #[arg(long, default_value_t = 1)]
     pub rounds: usize,
-    /// Objects the environments draw from.
+    /// Objects the environments draw from (`procedural`: the training stream, object builds
+    /// included).
     #[arg(long, default_value = "train")]
     pub objects: String,
     /// Environments stepped in parallel.
@@ -351,19 +352,29 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
     let robot = Robot::builtin(Side::Left);
     let model = super::rollout::load_synergy(None, 5)?;
-    let objects = super::rollout::sim_objects(&a.objects)?;
+    // `procedural`: each env builds a fresh stream object every few episodes, as training
+    // on the stream does, so the figure includes the objects' build cost.
+    let on_stream = a.objects == grasp::objects::stream::STREAM_SET;
+    let objects = if on_stream {
+        use grasp::env::stream::{ObjectStream, StreamConfig, FIRST_TRAINING_INDEX};
+        let first = ObjectStream::new(StreamConfig::default()).object(FIRST_TRAINING_INDEX);
+        vec![first.map_err(|m| anyhow::anyhow!("procedural stream: {m}"))?]
+    } else {
+        super::rollout::sim_objects(&a.objects)?
+    };
     let threads = super::rollout::threads(a.threads)?;
     let seed = g.seed.unwrap_or(0);
     let runs = alternate(&configs, a.rounds, |cfg| -> Result<EnvFigures> {
         let envs = (0..a.envs)
             .map(|_| -> Result<Box<dyn Env>> {
-                Ok(Box::new(GraspEnv::new(
+                let env = GraspEnv::new(
                     &robot,
                     objects.clone(),
                     model.clone(),
                     cfg.clone(),
                     EnvConfig::default(),
-                )?))
+                )?;
+                Ok(Box::new(if on_stream { env.with_stream() } else { env }))
             })
             .collect::<Result<Vec<_>>>()?;
         let mut venv = VecEnv::new(envs, threads, seed)?;

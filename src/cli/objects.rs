@@ -4,15 +4,19 @@ use super::Global;
 use anyhow::{bail, Context};
 use clap::{Args, Subcommand};
 use grasp::objects::sets::{self, BuildContext, ResolvedSpec};
+use grasp::objects::stream;
 use grasp::objects::{HullSource, Object, ObjectError};
 use std::path::{Path, PathBuf};
 
-/// Inspect the object library: built-in sets (`train`, `unseen`, `all`), folders of
-/// OBJ/STL meshes, manifests, or comma-separated built-in names.
+/// Inspect the object library: built-in sets (`train`, `unseen`, `all`), the procedural
+/// training stream (`procedural`, objects `proc-<seed>-<index>`), folders of OBJ/STL
+/// meshes, manifests, or comma-separated built-in names.
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   grasp objects list --set train
   grasp objects list --set ./my_meshes --json
+  grasp objects list --set procedural --count 20 --seed 3
+  grasp objects export proc-3-17 --out proc-3-17.obj
   grasp objects show bottle_tall
   grasp objects show mug --set objects.toml
   grasp objects export egad_c3_d2 --out egad_c3_d2.obj
@@ -28,9 +32,13 @@ pub struct ObjectsArgs {
 enum ObjectsCmd {
     /// List the objects of a set: name, kind, size, mass, hull count.
     List {
-        /// train | unseen | all | DIR | manifest.toml | mesh.obj | name,name,...
+        /// train | unseen | all | procedural | DIR | manifest.toml | mesh.obj | name,name,...
         #[arg(long = "set", visible_alias = "objects", default_value = "all")]
         set: String,
+        /// With `--set procedural`: how many stream objects to list (the stream seed is
+        /// `--seed`, default 0).
+        #[arg(long)]
+        count: Option<usize>,
     },
     /// Show one object: size, bounding box, mass, volume, friction, inertia, hulls.
     Show {
@@ -62,6 +70,9 @@ pub fn load_objects(arg: &str) -> anyhow::Result<Vec<Object>> {
 
 /// Finds object `name` in set `set`; a `name` that is an existing mesh file stands alone.
 fn find_spec(name: &str, set: &str) -> anyhow::Result<ResolvedSpec> {
+    if let Some((seed, index)) = stream::parse_name(name) {
+        return Ok(stream::stream_spec(seed, index));
+    }
     let specs = sets::resolve_specs(set).with_context(|| format!("cannot resolve set `{set}`"))?;
     if let Some(s) = specs.iter().find(|s| s.spec.name == name) {
         return Ok(s.clone());
@@ -107,8 +118,21 @@ fn cm(v: [f64; 3]) -> [f64; 3] {
 /// Runs `grasp objects`.
 pub fn run(args: ObjectsArgs, global: &Global) -> anyhow::Result<()> {
     match args.cmd {
-        ObjectsCmd::List { set } => {
-            let objects = load_objects(&set)?;
+        ObjectsCmd::List { set, count } => {
+            let objects = if set == stream::STREAM_SET {
+                let seed = global.seed.unwrap_or(0);
+                let n = count.unwrap_or(stream::DEFAULT_COUNT);
+                if n == 0 {
+                    bail!("--count must be at least 1");
+                }
+                sets::build_all(&stream::stream_specs(seed, n), &BuildContext::from_env())
+                    .with_context(|| format!("cannot build the procedural stream (seed {seed})"))?
+            } else {
+                if count.is_some() {
+                    bail!("--count applies to --set procedural only");
+                }
+                load_objects(&set)?
+            };
             let rows: Vec<Summary> = objects
                 .iter()
                 .map(|o| Summary {

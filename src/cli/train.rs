@@ -22,7 +22,7 @@ use super::Global;
 /// first one) starts afresh.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp train --config configs/cartpole.toml\n  grasp train --config configs/quick.toml --out runs/quick1 --seed 3\n  grasp train --config configs/gru_m3_pca5.toml --time-budget-minutes 60\n  grasp train --config configs/gru_m3_pca5.toml --resume\n  grasp train --config configs/base.toml --total-timesteps 20000 --num-envs 4 --json\n\nThe global --seed overrides the config's seed."
+    after_help = "Examples:\n  grasp train --config configs/cartpole.toml\n  grasp train --config configs/quick.toml --out runs/quick1 --seed 3\n  grasp train --config configs/gru_m3_pca5.toml --time-budget-minutes 60\n  grasp train --config configs/gru_m3_pca5.toml --resume\n  grasp train --config configs/stream.toml --objects procedural\n  grasp train --config configs/base.toml --total-timesteps 20000 --num-envs 4 --json\n\nThe global --seed overrides the config's seed."
 )]
 pub struct TrainArgs {
     /// Training config (TOML; may name a `base` config to inherit from).
@@ -44,6 +44,10 @@ pub struct TrainArgs {
     /// this many minutes.
     #[arg(long)]
     pub time_budget_minutes: Option<f64>,
+    /// Override the config's object set: train, unseen, a folder, a manifest, names, or
+    /// `procedural` (a fresh procedural object every few episodes, see `[env.stream]`).
+    #[arg(long)]
+    pub objects: Option<String>,
 }
 
 pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
@@ -60,6 +64,9 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
     }
     if let Some(m) = a.time_budget_minutes {
         cfg.time_budget_minutes = Some(m);
+    }
+    if let Some(o) = &a.objects {
+        cfg.objects = o.clone();
     }
     cfg.validate(&a.config)
         .context("invalid value given on the command line")?;

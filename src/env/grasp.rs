@@ -28,7 +28,9 @@ pub use super::closing::closing_target;
 use super::closing::{ClosingPath, ClosingSpace};
 use super::curriculum::{Curriculum, CurriculumConfig};
 use super::obs::{FrameStack, Modality, ObsLayout};
+use super::randomize::Randomization;
 use super::reward;
+use super::stream::{ObjectStream, StreamConfig};
 use crate::robot::{Posture, Robot};
 use crate::sim::{script, HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig, SimError};
 use crate::synergy::SynergyModel;
@@ -79,6 +81,10 @@ pub struct EnvConfig {
     pub action: ActionConfig,
     /// Curriculum (eq. 6); each environment keeps its own window.
     pub curriculum: CurriculumConfig,
+    /// Per-episode domain randomisation (off by default; evaluation turns it off).
+    pub randomization: Randomization,
+    /// The procedural stream's settings, used when training on `objects = "procedural"`.
+    pub stream: StreamConfig,
 }
 
 impl Default for EnvConfig {
@@ -98,6 +104,8 @@ impl Default for EnvConfig {
                 window: 20,
                 ..CurriculumConfig::default()
             },
+            randomization: Randomization::default(),
+            stream: StreamConfig::default(),
         }
     }
 }
@@ -164,6 +172,9 @@ impl EnvConfig {
         if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {
             return bad("curriculum.fixed_rate", "must be in [0, 1]".into());
         }
+        if let Err((field, message)) = self.randomization.validate() {
+            return bad(field, message);
+        }
         match self.start_posture.as_str() {
             "open" => Ok(Posture::Open),
             "c-shape" => Ok(Posture::CShape),
@@ -210,6 +221,12 @@ pub struct GraspEnv {
     sim: HandSim,
     objects: Vec<(String, ObjectSpec)>,
     current_object: usize,
+    /// Index in `objects` of the episode's object.
+    episode_object: usize,
+    /// The procedural stream, when the environment trains on it (see [`Self::with_stream`]).
+    stream: Option<ObjectStream>,
+    /// Noise of the observed sensors, re-seeded at each reset (domain randomisation).
+    noise: rand_chacha::ChaCha8Rng,
     synergy: SynergyModel,
     eps_std: Vec<f64>,
     finger_limits: [(f64, f64); 22],
@@ -256,7 +273,10 @@ impl GraspEnv {
             path,
             sim,
             current_object: 0,
+            episode_object: 0,
             objects,
+            stream: None,
+            noise: rand_chacha::ChaCha8Rng::seed_from_u64(0),
             synergy,
             eps_std,
             finger_limits,
@@ -272,6 +292,14 @@ impl GraspEnv {
             last: None,
             done: true,
         })
+    }
+
+    /// Switches the environment to the procedural object stream: from the next reset on,
+    /// it builds a fresh stream object every `cfg.stream.reuse` episodes (see
+    /// [`super::stream`]) instead of drawing from its object set.
+    pub fn with_stream(mut self) -> Self {
+        self.stream = Some(ObjectStream::new(self.cfg.stream.clone()));
+        self
     }
 
     /// The observation layout.
@@ -317,15 +345,32 @@ impl GraspEnv {
     /// [`GraspEnv::reset_scene`] with the hand in posture `start`.
     fn reset_scene_from(&mut self, seed: u64, start: [f64; 24]) -> Result<(), SimError> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let k = rng.random_range(0..self.objects.len());
-        if k != self.current_object {
-            self.sim.set_object(self.objects[k].1.clone())?;
-            self.current_object = k;
+        if let Some(next) = self.stream.as_mut().and_then(|s| s.next(&mut rng)) {
+            self.objects = vec![next];
+            self.current_object = usize::MAX;
         }
+        let k = rng.random_range(0..self.objects.len());
         let p = self.curriculum.sample(&mut rng);
-        let mut scene = Scene::top_down(&self.objects[k].1, start, self.cfg.grasp_depth, 0.0);
+        let dr = &self.cfg.randomization;
+        let (object, yaw) = if dr.enabled {
+            let o = dr.object(&self.objects[k].1, &mut rng);
+            let yaw = dr.yaw(&mut rng);
+            self.sim.set_object(o.clone())?;
+            // The simulator holds a randomised copy: the next episode sets its own.
+            self.current_object = usize::MAX;
+            self.noise = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x6e6f_6973_655f_7273);
+            (o, yaw)
+        } else {
+            if k != self.current_object {
+                self.sim.set_object(self.objects[k].1.clone())?;
+                self.current_object = k;
+            }
+            (self.objects[k].1.clone(), 0.0)
+        };
+        self.episode_object = k;
+        let mut scene = Scene::top_down(&object, start, self.cfg.grasp_depth, 0.0);
         scene.object_xy = [p.dx, p.dy];
-        scene.object_yaw = p.dyaw;
+        scene.object_yaw = p.dyaw + yaw;
         // The hand starts clear of the object: where the start posture would overlap a
         // large object, the hand is raised in 5 mm steps (at most 10 cm).
         self.sim.reset(&scene)?;
@@ -380,9 +425,21 @@ impl GraspEnv {
     fn push_frame(&mut self, prev_action: &[f32]) {
         let s = self.sim.sensors();
         let tactile = s.tactile.map(|b| b == 1);
-        let frame = self
-            .layout
-            .frame(prev_action, &tactile, &s.torque_level, &s.q);
+        let dr = &self.cfg.randomization;
+        let frame = if dr.enabled {
+            let sc = &self.sim.config().sensors;
+            let levels = dr.noisy_levels(
+                &s.effort,
+                sc.torque_scale,
+                &sc.torque_thresholds,
+                &mut self.noise,
+            );
+            let q = dr.noisy_angles(&s.q, &mut self.noise);
+            self.layout.frame(prev_action, &tactile, &levels, &q)
+        } else {
+            self.layout
+                .frame(prev_action, &tactile, &s.torque_level, &s.q)
+        };
         self.stack.push(frame);
     }
 
@@ -391,7 +448,7 @@ impl GraspEnv {
             self.curriculum.record(success);
         }
         self.last = Some(EpisodeSummary {
-            object: self.objects[self.current_object].0.clone(),
+            object: self.objects[self.episode_object].0.clone(),
             success,
             steps: self.steps,
             episode_return: self.episode_return,

@@ -8,6 +8,8 @@
 //! - [`reward`]: eq. 4 and eq. 5.
 //! - [`closing`]: the stage-1 closing trajectory T, in joint or synergy space.
 //! - [`curriculum`]: eq. 6.
+//! - [`randomize`]: per-episode domain randomisation (object and sensor noise).
+//! - [`stream`]: training on the procedural object stream.
 //! - [`grasp`]: the grasping environment (stages 1 and 2, lift) and the scripted baselines.
 //! - [`cartpole`]: continuous CartPole, the learner's textbook check.
 
@@ -19,4 +21,6 @@ pub mod closing;
 pub mod curriculum;
 pub mod grasp;
 pub mod obs;
+pub mod randomize;
 pub mod reward;
+pub mod stream;

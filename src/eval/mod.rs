@@ -394,7 +394,8 @@ pub fn evaluate(
 /// saves beside every checkpoint.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckpointSetup {
-    /// The grasping MDP's settings (modality, history, action scales, closing, ...).
+    /// The grasping MDP's settings (modality, history, action scales, closing, ...), with
+    /// domain randomisation turned off.
     pub env: EnvConfig,
     /// Synergy components the policy acts in.
     pub n_components: usize,
@@ -479,8 +480,11 @@ pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError
         });
     }
     let synergy = dir.join(files::SYNERGY);
+    let mut env = cfg.env.grasp;
+    // Every agent is judged on the same, unrandomised objects and sensors.
+    env.randomization.enabled = false;
     Ok(Some(CheckpointSetup {
-        env: cfg.env.grasp,
+        env,
         n_components: cfg.n_components,
         synergy: synergy.is_file().then_some(synergy),
     }))

@@ -35,9 +35,11 @@
 pub mod decomp;
 pub mod mesh;
 pub mod procedural;
+pub mod random_shapes;
 pub mod rest;
 pub mod sets;
 pub mod spec;
+pub mod stream;
 
 pub use decomp::{CacheStatus, DecompParams};
 pub use mesh::{Aabb, MassProps, TriMesh};

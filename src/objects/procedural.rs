@@ -65,7 +65,7 @@ impl Params {
     }
 }
 
-type BuildFn = fn(&mut ChaCha8Rng, &Params) -> Result<Generated, String>;
+pub(super) type BuildFn = fn(&mut ChaCha8Rng, &Params) -> Result<Generated, String>;
 
 /// A named generator with its parameters.
 #[derive(Clone, Copy)]
@@ -326,6 +326,28 @@ pub const GENERATORS: &[GeneratorDef] = &[
             p("height", 0.04, 0.01, 0.1, "block height (m)"),
         ],
         build: build_block,
+    },
+    GeneratorDef {
+        name: "extrusion",
+        doc: "random polygon (seeded angles and radii, possibly non-convex) extruded along z: wedges, kites, irregular prisms",
+        params: &[
+            p("sides", 5.0, 3.0, 8.0, "polygon vertices"),
+            p("radius", 0.035, 0.01, 0.07, "largest vertex distance from the centre (m)"),
+            p("height", 0.06, 0.01, 0.25, "extrusion length (m)"),
+            p("irregularity", 0.5, 0.0, 0.9, "0 = regular polygon; larger = jittered angles, radii down to (1 - irregularity) radius"),
+        ],
+        build: super::random_shapes::build_extrusion,
+    },
+    GeneratorDef {
+        name: "stack",
+        doc: "vertical stack of seeded boxes and cylinders standing face to face, optionally with a side arm",
+        params: &[
+            p("parts", 3.0, 2.0, 4.0, "number of stacked parts"),
+            p("width", 0.06, 0.03, 0.1, "largest part width (m)"),
+            p("height", 0.12, 0.04, 0.2, "nominal total height (m)"),
+            p("arm", 0.0, 0.0, 1.0, ">= 0.5: a box arm on the side of the first box"),
+        ],
+        build: super::random_shapes::build_stack,
     },
 ];
 

@@ -30,11 +30,13 @@
 //!
 //! # The `--objects` argument ([`resolve_specs`])
 //!
-//! `train`, `unseen`, `all`; a folder of `.obj`/`.stl` files (one object each, named by
+//! `train`, `unseen`, `all`; `procedural` (the first 64 objects of the procedural stream,
+//! see [`super::stream`]); a folder of `.obj`/`.stl` files (one object each, named by
 //! the file stem, default density and friction); a manifest `.toml` (see [`super::spec`]);
-//! a single `.obj`/`.stl` file; or a comma-separated list of built-in object names.
+//! a single `.obj`/`.stl` file; or a comma-separated list of built-in object names and
+//! stream objects (`proc-<seed>-<index>`).
 
-use super::decomp::{decompose_cached, DecompParams};
+use super::decomp::{decompose, decompose_cached, CacheStatus, DecompParams};
 use super::mesh::{MassProps, TriMesh};
 use super::procedural::{box_mesh, generate, icosphere, revolve};
 use super::spec::{load_manifest, MassSpec, ObjectKind, ObjectSpec, ShapeSpec};
@@ -60,6 +62,9 @@ pub struct BuildContext {
     pub cache_dir: PathBuf,
     /// VHACD parameters.
     pub decomp: DecompParams,
+    /// Whether decompositions are read from and written to the cache folder (false: always
+    /// computed, nothing written; the per-episode objects of the training stream).
+    pub cache: bool,
 }
 
 impl BuildContext {
@@ -73,6 +78,15 @@ impl BuildContext {
         BuildContext {
             cache_dir: dir.into(),
             decomp: DecompParams::default(),
+            cache: true,
+        }
+    }
+
+    /// Default parameters, no cache: every decomposition is computed, nothing is written.
+    pub fn uncached() -> Self {
+        BuildContext {
+            cache: false,
+            ..Self::with_cache_dir(PathBuf::new())
         }
     }
 }
@@ -197,10 +211,19 @@ pub fn prepare(rs: &ResolvedSpec) -> Result<Prepared, ObjectError> {
             generator,
             seed,
             params,
+            scale,
         } => {
-            let g = generate(generator, *seed, params, &spec.name, &rs.source)?;
+            let mut g = generate(generator, *seed, params, &spec.name, &rs.source)?;
             let label = format!("{} (generator {generator}, {})", spec.name, rs.source);
             g.mesh.validate(&label)?;
+            if *scale != 1.0 {
+                g.mesh.scale([*scale; 3]);
+                for h in g.parts.iter_mut().flatten() {
+                    for q in &mut h.points {
+                        *q = q.map(|x| x * scale);
+                    }
+                }
+            }
             (g.mesh, g.parts, label)
         }
         _ => {
@@ -327,8 +350,15 @@ impl Prepared {
                     HullSource::Convex,
                 )
             } else {
-                let file = self.cache_file(ctx);
-                let (h, status) = decompose_cached(&self.mesh, &ctx.decomp, &file, &name)?;
+                let (h, status) = if ctx.cache {
+                    let file = self.cache_file(ctx);
+                    decompose_cached(&self.mesh, &ctx.decomp, &file, &name)?
+                } else {
+                    (
+                        decompose(&self.mesh, &ctx.decomp, &name)?,
+                        CacheStatus::Built,
+                    )
+                };
                 (h, HullSource::Vhacd(status))
             }
         };
@@ -382,7 +412,7 @@ fn friction_of(kind: ObjectKind) -> f64 {
         ObjectKind::ShapenetLike => 0.75,
         ObjectKind::Egad => 0.9,
         ObjectKind::Primitive => 0.7,
-        ObjectKind::User => super::spec::DEFAULT_FRICTION,
+        ObjectKind::User | ObjectKind::Procedural => super::spec::DEFAULT_FRICTION,
     }
 }
 
@@ -421,6 +451,7 @@ fn gen(
             generator: generator.to_string(),
             seed,
             params: params(p),
+            scale: 1.0,
         },
         m,
     )
@@ -837,7 +868,7 @@ pub fn suggest(name: &str) -> Vec<String> {
 fn unknown(name: &str) -> ObjectError {
     let sugg = suggest(name);
     let mut hint = format!(
-        "known sets are {} (or a folder of .obj/.stl files, a manifest .toml, a mesh file, or a comma-separated list of built-in object names; `grasp objects list` shows them)",
+        "known sets are {}, procedural (or a folder of .obj/.stl files, a manifest .toml, a mesh file, or a comma-separated list of built-in object names; `grasp objects list` shows them)",
         BUILTIN_SETS.join(", ")
     );
     if !sugg.is_empty() {
@@ -906,6 +937,9 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
     if let Some(set) = builtin_set(arg) {
         return Ok(set.into_iter().map(builtin).collect());
     }
+    if arg == super::stream::STREAM_SET {
+        return Ok(super::stream::stream_specs(0, super::stream::DEFAULT_COUNT));
+    }
     let path = Path::new(arg);
     let src = path.display().to_string();
     let looks_like_path = arg.contains('/')
@@ -973,6 +1007,10 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
     let all = builtin_set("all").unwrap_or_default();
     let mut out = Vec::new();
     for name in arg.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        if let Some((seed, index)) = super::stream::parse_name(name) {
+            out.push(super::stream::stream_spec(seed, index));
+            continue;
+        }
         let s = all
             .iter()
             .find(|s| s.name == name)
@@ -1033,6 +1071,7 @@ mod tests {
                 generator,
                 seed,
                 params,
+                ..
             } => format!("{generator}:{seed}:{params:?}"),
             other => format!("{other:?}"),
         };

@@ -57,6 +57,8 @@ pub enum ObjectKind {
     Primitive,
     /// A user's object.
     User,
+    /// An object of the procedural training stream ([`super::stream`]).
+    Procedural,
 }
 
 impl ObjectKind {
@@ -68,6 +70,7 @@ impl ObjectKind {
             ObjectKind::Egad => "egad",
             ObjectKind::Primitive => "primitive",
             ObjectKind::User => "user",
+            ObjectKind::Procedural => "procedural",
         }
     }
 }
@@ -136,6 +139,9 @@ pub enum ShapeSpec {
         /// Parameter overrides, by name.
         #[serde(default)]
         params: BTreeMap<String, f64>,
+        /// Uniform factor applied to the generated shape (default 1).
+        #[serde(default = "default_scale")]
+        scale: f64,
     },
 }
 
@@ -297,7 +303,12 @@ impl ObjectSpec {
                     return Err(err("shape.path", "empty path".into()));
                 }
             }
-            ShapeSpec::Procedural { generator, .. } => {
+            ShapeSpec::Procedural {
+                generator, scale, ..
+            } => {
+                if !(scale.is_finite() && (0.05..=20.0).contains(scale)) {
+                    return Err(err("shape.scale", format!("{scale} is outside 0.05..=20")));
+                }
                 if super::procedural::find_generator(generator).is_none() {
                     let known: Vec<_> = super::procedural::GENERATORS
                         .iter()

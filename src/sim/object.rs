@@ -67,7 +67,8 @@ impl std::fmt::Debug for ConvexParts {
 }
 
 impl PartialEq for ConvexParts {
-    /// Parts are equal when they share the same storage (they are never rebuilt).
+    /// Parts are equal when they share the same storage: a rebuilt or scaled copy of the
+    /// same parts compares unequal.
     fn eq(&self, other: &Self) -> bool {
         Arc::ptr_eq(&self.0, &other.0)
     }
@@ -113,7 +114,84 @@ pub enum ObjectShape {
     },
 }
 
+/// `shape` scaled uniformly by `s` about its own origin; `None` for a shape kind library
+/// objects never use.
+fn scale_shape(shape: &SharedShape, s: f32) -> Option<SharedShape> {
+    use rapier3d::parry::shape::TypedShape;
+    match shape.as_typed_shape() {
+        TypedShape::Ball(b) => Some(SharedShape::ball(b.radius * s)),
+        TypedShape::Cuboid(c) => {
+            let h = c.half_extents * s;
+            Some(SharedShape::cuboid(h.x, h.y, h.z))
+        }
+        TypedShape::Capsule(c) => Some(SharedShape::capsule(
+            c.segment.a * s,
+            c.segment.b * s,
+            c.radius * s,
+        )),
+        TypedShape::Cylinder(c) => Some(SharedShape::cylinder(c.half_height * s, c.radius * s)),
+        TypedShape::ConvexPolyhedron(p) => {
+            let pts: Vec<Vector> = p.points().iter().map(|q| *q * s).collect();
+            SharedShape::convex_hull(&pts)
+        }
+        _ => None,
+    }
+}
+
 impl ObjectShape {
+    /// The shape scaled uniformly by `s` (> 0) about the body origin: sizes by `s`, volume
+    /// by `s^3`, inertia per kilogram by `s^2` (domain randomisation of the object's size).
+    /// `None` when a part cannot be scaled.
+    pub fn scaled(&self, s: f64) -> Option<ObjectShape> {
+        if !(s.is_finite() && s > 0.0) {
+            return None;
+        }
+        Some(match self {
+            ObjectShape::Box { half } => ObjectShape::Box {
+                half: half.map(|h| h * s),
+            },
+            ObjectShape::Cylinder {
+                radius,
+                half_height,
+            } => ObjectShape::Cylinder {
+                radius: radius * s,
+                half_height: half_height * s,
+            },
+            ObjectShape::Library {
+                parts,
+                part_count,
+                support_feet,
+                half,
+                com,
+                unit_inertia,
+                volume,
+                body_from_library,
+            } => {
+                let sf = s as f32;
+                let scaled: Option<Vec<(Pose, SharedShape)>> = parts
+                    .parts()
+                    .iter()
+                    .map(|(pose, shape)| {
+                        let mut p = *pose;
+                        p.translation *= sf;
+                        scale_shape(shape, sf).map(|sh| (p, sh))
+                    })
+                    .collect();
+                let (t, q) = *body_from_library;
+                ObjectShape::Library {
+                    parts: ConvexParts(Arc::new(scaled?)),
+                    part_count: *part_count,
+                    support_feet: *support_feet,
+                    half: half.map(|h| h * s),
+                    com: com.map(|c| c * s),
+                    unit_inertia: unit_inertia.map(|row| row.map(|v| v * s * s)),
+                    volume: volume * s * s * s,
+                    body_from_library: (t.map(|x| x * s), q),
+                }
+            }
+        })
+    }
+
     /// Volume (m^3).
     pub fn volume(&self) -> f64 {
         match *self {
@@ -475,6 +553,48 @@ mod tests {
         };
         assert!((c.volume() - std::f64::consts::PI * 0.01).abs() < 1e-12);
         assert_eq!(c.rest_height(), 0.5);
+    }
+
+    #[test]
+    fn scaling_scales_sizes_volume_and_inertia_hand_computed() {
+        // Box 2 x 4 x 6 cm scaled by 2: 4 x 8 x 12 cm, volume 8 x 48e-6 = 3.84e-4 m^3.
+        let b = ObjectShape::Box {
+            half: [0.01, 0.02, 0.03],
+        };
+        let b2 = b.scaled(2.0).unwrap();
+        assert_eq!(b2.half_extents(), [0.02, 0.04, 0.06]);
+        assert!((b2.volume() - 3.84e-4).abs() < 1e-15);
+        assert!(b.scaled(0.0).is_none() && b.scaled(f64::NAN).is_none());
+        // A library object (a YCB-like mug: convex parts): half extents, com and volume
+        // scale by 1.5, 1.5, 1.5^3; the per-kg inertia by 1.5^2; the collider's AABB with it.
+        let s = ObjectSpec::from_object(&library("mug")).unwrap();
+        let ObjectShape::Library {
+            com, unit_inertia, ..
+        } = &s.shape
+        else {
+            panic!("mug is a library object")
+        };
+        let big = s.shape.scaled(1.5).unwrap();
+        let ObjectShape::Library {
+            com: c2,
+            unit_inertia: i2,
+            ..
+        } = &big
+        else {
+            panic!("scaling keeps the kind")
+        };
+        for k in 0..3 {
+            assert!((big.half_extents()[k] - 1.5 * s.shape.half_extents()[k]).abs() < 1e-12);
+            assert!((c2[k] - 1.5 * com[k]).abs() < 1e-12);
+            assert!((i2[k][k] - 2.25 * unit_inertia[k][k]).abs() < 1e-15);
+        }
+        assert!((big.volume() - 3.375 * s.shape.volume()).abs() < 1e-12);
+        let aabb = |sh: &ObjectShape| {
+            let c = sh.collider().build();
+            let a = c.shape().compute_local_aabb();
+            (a.maxs - a.mins).x as f64
+        };
+        assert!((aabb(&big) - 1.5 * aabb(&s.shape)).abs() < 1e-5);
     }
 
     #[test]

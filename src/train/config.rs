@@ -32,6 +32,8 @@ use crate::env::closing::ClosingSpace;
 use crate::env::curriculum::CurriculumConfig;
 use crate::env::grasp::{AtMaxSteps, EnvConfig};
 use crate::env::obs::Modality;
+use crate::env::randomize::Randomization;
+use crate::env::stream::StreamConfig;
 use crate::policy::PolicyConfig;
 use crate::ppo::PpoConfig;
 use crate::util::config::{parse_toml, ConfigError};
@@ -93,8 +95,10 @@ pub struct TrainConfig {
     pub best_window: usize,
     /// Stop cleanly (with a checkpoint) after this much wall time, if set.
     pub time_budget_minutes: Option<f64>,
-    /// The object set: `"primitives"` ([`super::objects::primitives`]) or anything
-    /// `--objects` accepts (`train`, `unseen`, a folder, a manifest, names).
+    /// The object set: `"primitives"` ([`super::objects::primitives`]), `"procedural"`
+    /// (the procedural object stream: a fresh object every `env.stream.reuse` episodes,
+    /// see [`crate::env::stream`]) or anything `--objects` accepts (`train`, `unseen`, a
+    /// folder, a manifest, names).
     pub objects: String,
     /// The synergy model JSON (grasp runs).
     pub synergy: PathBuf,
@@ -128,6 +132,8 @@ struct EnvSection {
     at_max_steps: Option<AtMaxSteps>,
     action: Option<ActionConfig>,
     curriculum: Option<CurriculumConfig>,
+    randomization: Option<Randomization>,
+    stream: Option<StreamConfig>,
 }
 
 /// One file (or the merged chain): every key optional.
@@ -311,6 +317,8 @@ impl TrainConfig {
             at_max_steps: e.at_max_steps.unwrap_or(d.at_max_steps),
             action: e.action.unwrap_or(d.action),
             curriculum: e.curriculum.unwrap_or(d.curriculum),
+            randomization: e.randomization.unwrap_or(d.randomization),
+            stream: e.stream.unwrap_or(d.stream),
         };
         let ppo_defaults = PpoConfig::default();
         let cfg = TrainConfig {
@@ -405,7 +413,7 @@ impl TrainConfig {
         if let Some(Err(m)) = self.threads.map(crate::util::threads::check) {
             return bad("threads", m);
         }
-        if self.objects != "primitives" {
+        if self.objects != "primitives" && self.objects != crate::objects::stream::STREAM_SET {
             if let Err(e) = crate::objects::sets::resolve_specs(&self.objects) {
                 return bad("objects", e.to_string());
             }

@@ -7,6 +7,7 @@ use super::{plot, tfevents, TrainError};
 use crate::env::api::{Action, ActionSpec, Env, Step};
 use crate::env::cartpole::CartPole;
 use crate::env::grasp::GraspEnv;
+use crate::env::stream::{ObjectStream, FIRST_TRAINING_INDEX};
 use crate::ppo::{Trainer, UpdateMetrics, CHECKPOINT_FILE};
 use crate::robot::{Robot, Side};
 use crate::sim::SimConfig;
@@ -131,7 +132,16 @@ fn build_envs(cfg: &TrainConfig) -> Result<Built, TrainError> {
                 Some(p) => SimConfig::load(p)?,
                 None => SimConfig::default(),
             };
-            let objects = object_set(&cfg.objects).map_err(|message| TrainError::ConfigValue {
+            let on_stream = cfg.objects == crate::objects::stream::STREAM_SET;
+            // On the stream, each environment starts on one stream object and builds the
+            // next ones itself (see `env::stream`).
+            let objects = if on_stream {
+                let stream = ObjectStream::new(cfg.env.grasp.stream.clone());
+                stream.object(FIRST_TRAINING_INDEX).map(|o| vec![o])
+            } else {
+                object_set(&cfg.objects)
+            }
+            .map_err(|message| TrainError::ConfigValue {
                 path: PathBuf::from(files::CONFIG),
                 field: "objects".into(),
                 message,
@@ -142,13 +152,16 @@ fn build_envs(cfg: &TrainConfig) -> Result<Built, TrainError> {
             });
             let mut envs: Vec<Box<dyn Env>> = Vec::with_capacity(cfg.num_envs);
             for index in 0..cfg.num_envs {
-                let env = GraspEnv::new(
+                let mut env = GraspEnv::new(
                     &robot,
                     objects.clone(),
                     model.clone(),
                     sim.clone(),
                     cfg.env.grasp.clone(),
                 )?;
+                if on_stream {
+                    env = env.with_stream();
+                }
                 let p = ProbedGrasp {
                     env,
                     probe: Arc::clone(&probe),
