@@ -237,6 +237,47 @@ fn grasp_env_with_primitives_runs_one_update() {
     ]);
     let err = String::from_utf8_lossy(&e.stderr);
     assert!(!e.status.success() && err.contains("at least 8"), "{err}");
+
+    // On the procedural stream with domain randomisation, chosen on the command line.
+    let dr = write(
+        tmp.path(),
+        "gdr.toml",
+        &format!("{text}[env.randomization]\nenabled = true\n"),
+    );
+    let run = tmp.path().join("stream");
+    let out = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&dr),
+        "--objects",
+        "procedural",
+        "--out",
+        s(&run),
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["global_step"], 16);
+    let saved = TrainConfig::load(&run.join("config.toml")).unwrap();
+    assert_eq!(saved.objects, "procedural");
+    assert!(saved.env.grasp.randomization.enabled);
+    // A randomisation range outside physics names its key.
+    let bad = write(
+        tmp.path(),
+        "gbad.toml",
+        &format!("{text}[env.randomization]\nfriction = [0.5, 1.5]\n"),
+    );
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&bad),
+        "--out",
+        s(&tmp.path().join("rb")),
+    ]);
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        !e.status.success() && err.contains("randomization.friction"),
+        "{err}"
+    );
 }
 
 #[test]

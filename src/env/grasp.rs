@@ -175,6 +175,9 @@ impl EnvConfig {
         if let Err((field, message)) = self.randomization.validate() {
             return bad(field, message);
         }
+        if self.stream.reuse == 0 {
+            return bad("stream.reuse", "must be at least 1".into());
+        }
         match self.start_posture.as_str() {
             "open" => Ok(Posture::Open),
             "c-shape" => Ok(Posture::CShape),
