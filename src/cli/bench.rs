@@ -356,8 +356,8 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     // on the stream does, so the figure includes the objects' build cost.
     let on_stream = a.objects == grasp::objects::stream::STREAM_SET;
     let objects = if on_stream {
-        use grasp::env::stream::{ObjectStream, StreamConfig, FIRST_TRAINING_INDEX};
-        let first = ObjectStream::new(StreamConfig::default()).object(FIRST_TRAINING_INDEX);
+        use grasp::env::stream::{ObjectStream, StreamConfig};
+        let first = ObjectStream::new(StreamConfig::default()).first_object();
         vec![first.map_err(|m| anyhow::anyhow!("procedural stream: {m}"))?]
     } else {
         super::rollout::sim_objects(&a.objects)?

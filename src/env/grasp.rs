@@ -223,7 +223,9 @@ pub struct GraspEnv {
     path: ClosingPath,
     sim: HandSim,
     objects: Vec<(String, ObjectSpec)>,
-    current_object: usize,
+    /// Which of `objects` the simulator holds (`None`: another object, e.g. a randomised
+    /// copy).
+    current_object: Option<usize>,
     /// Index in `objects` of the episode's object.
     episode_object: usize,
     /// The procedural stream, when the environment trains on it (see [`Self::with_stream`]).
@@ -275,7 +277,7 @@ impl GraspEnv {
             closed,
             path,
             sim,
-            current_object: 0,
+            current_object: Some(0),
             episode_object: 0,
             objects,
             stream: None,
@@ -350,28 +352,32 @@ impl GraspEnv {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         if let Some(next) = self.stream.as_mut().and_then(|s| s.next(&mut rng)) {
             self.objects = vec![next];
-            self.current_object = usize::MAX;
+            self.current_object = None;
         }
         let k = rng.random_range(0..self.objects.len());
         let p = self.curriculum.sample(&mut rng);
         let dr = &self.cfg.randomization;
-        let (object, yaw) = if dr.enabled {
+        let randomized = if dr.enabled {
             let o = dr.object(&self.objects[k].1, &mut rng);
             let yaw = dr.yaw(&mut rng);
             self.sim.set_object(o.clone())?;
             // The simulator holds a randomised copy: the next episode sets its own.
-            self.current_object = usize::MAX;
+            self.current_object = None;
             self.noise = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x6e6f_6973_655f_7273);
-            (o, yaw)
+            Some((o, yaw))
         } else {
-            if k != self.current_object {
+            if self.current_object != Some(k) {
                 self.sim.set_object(self.objects[k].1.clone())?;
-                self.current_object = k;
+                self.current_object = Some(k);
             }
-            (self.objects[k].1.clone(), 0.0)
+            None
         };
         self.episode_object = k;
-        let mut scene = Scene::top_down(&object, start, self.cfg.grasp_depth, 0.0);
+        let (object, yaw) = match &randomized {
+            Some((o, yaw)) => (o, *yaw),
+            None => (&self.objects[k].1, 0.0),
+        };
+        let mut scene = Scene::top_down(object, start, self.cfg.grasp_depth, 0.0);
         scene.object_xy = [p.dx, p.dy];
         scene.object_yaw = p.dyaw + yaw;
         // The hand starts clear of the object: where the start posture would overlap a

@@ -14,6 +14,7 @@
 use crate::sim::ObjectSpec;
 use crate::util::levels::torque_level;
 use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 /// Ranges of the per-episode randomisation.
@@ -54,11 +55,9 @@ impl Default for Randomization {
     }
 }
 
-/// A standard normal draw (Box-Muller).
+/// A standard normal draw, as the sim backend's raw-sensor model draws its noise.
 fn normal(rng: &mut impl Rng) -> f64 {
-    let u1: f64 = rng.random_range(f64::EPSILON..1.0);
-    let u2: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    StandardNormal.sample(rng)
 }
 
 fn draw(rng: &mut impl Rng, r: [f64; 2]) -> f64 {

@@ -10,8 +10,8 @@
 //! computed in memory, nothing cached on disk); `reuse` spreads that cost over several
 //! episodes (`grasp bench env --objects procedural` measures it).
 
-use crate::objects::sets::{build, BuildContext};
-use crate::objects::stream::stream_spec;
+use crate::objects::sets::BuildContext;
+use crate::objects::stream::{name, stream_prepared};
 use crate::sim::ObjectSpec;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -58,11 +58,18 @@ impl ObjectStream {
 
     /// Object `index` of the stream, ready for the simulator.
     pub fn object(&self, index: u64) -> Result<(String, ObjectSpec), String> {
-        let rs = stream_spec(self.cfg.seed, index);
-        let name = rs.spec.name.clone();
-        let o = build(&rs, &self.ctx).map_err(|e| format!("{name}: {e}"))?;
+        let name = name(self.cfg.seed, index);
+        let o = stream_prepared(self.cfg.seed, index)
+            .and_then(|p| p.finish(&self.ctx))
+            .map_err(|e| format!("{name}: {e}"))?;
         let s = ObjectSpec::from_object(&o).map_err(|e| format!("{name}: {e}"))?;
         Ok((name, s))
+    }
+
+    /// The object an environment starts on before its first reset draws one (the first
+    /// index training may draw): `GraspEnv::new` needs an object to build its simulator.
+    pub fn first_object(&self) -> Result<(String, ObjectSpec), String> {
+        self.object(FIRST_TRAINING_INDEX)
     }
 
     /// Called at each episode's reset: every `reuse` episodes, a new object whose index is

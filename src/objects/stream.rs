@@ -31,9 +31,11 @@
 //! stream (`objects = "procedural"` in a training config) draws a fresh index per object
 //! from each episode's seed (see `env::stream`).
 
+use super::procedural::ParamDef;
 use super::procedural::GENERATORS;
-use super::sets::{prepare, unseen_set, ResolvedSpec};
+use super::sets::{prepare, unseen_set, Prepared, ResolvedSpec};
 use super::spec::{ObjectKind, ObjectSpec, ShapeSpec};
+use super::ObjectError;
 use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
@@ -107,16 +109,11 @@ pub fn is_unseen_like(shape: &ShapeSpec, unseen: &[ObjectSpec]) -> bool {
     let Some(def) = super::procedural::find_generator(generator) else {
         return false;
     };
-    let value = |p: &BTreeMap<String, f64>, name: &str, default: f64| {
-        p.get(name).copied().unwrap_or(default)
-    };
+    let value =
+        |p: &BTreeMap<String, f64>, pd: &ParamDef| p.get(pd.name).copied().unwrap_or(pd.default);
     let close_to = |other: &BTreeMap<String, f64>| {
         def.params.iter().all(|pd| {
-            let (a, b) = (
-                value(params, pd.name, pd.default),
-                value(other, pd.name, pd.default),
-            );
-            (a - b).abs() <= UNSEEN_TOLERANCE * (pd.max - pd.min)
+            (value(params, pd) - value(other, pd)).abs() <= UNSEEN_TOLERANCE * (pd.max - pd.min)
         })
     };
     let has_sphere = unseen
@@ -124,14 +121,10 @@ pub fn is_unseen_like(shape: &ShapeSpec, unseen: &[ObjectSpec]) -> bool {
         .any(|u| matches!(u.shape, ShapeSpec::Sphere { .. }));
     if has_sphere && generator == "superquadric" {
         let g = |n: &str| {
-            value(
-                params,
-                n,
-                def.params
-                    .iter()
-                    .find(|p| p.name == n)
-                    .map_or(0.0, |p| p.default),
-            )
+            def.params
+                .iter()
+                .find(|pd| pd.name == n)
+                .map_or(f64::NAN, |pd| value(params, pd))
         };
         let axes = [g("rx"), g("ry"), g("rz")];
         let (lo, hi) = axes
@@ -213,10 +206,11 @@ fn resolved(spec: ObjectSpec, seed: u64) -> ResolvedSpec {
     }
 }
 
-/// Extents of `spec` at rest (m) and its volume (m^3), `None` if it does not build.
-fn extents(spec: &ObjectSpec, seed: u64) -> Option<([f64; 3], f64)> {
+/// `spec` prepared (at rest) with its extents (m), `None` if it does not build.
+fn prepared(spec: &ObjectSpec, seed: u64) -> Option<(Prepared, [f64; 3])> {
     let p = prepare(&resolved(spec.clone(), seed)).ok()?;
-    Some((p.mesh.aabb()?.extents(), p.volume_m3))
+    let e = p.mesh.aabb()?.extents();
+    Some((p, e))
 }
 
 /// Whether extents `e` (m) meet the stream's size rules.
@@ -231,6 +225,21 @@ fn fits(e: [f64; 3]) -> bool {
 /// Object `index` of stream `seed` (see the module docs). Never fails: after
 /// [`MAX_DRAWS`] rejected draws it is a 5 x 5 x 8 cm box.
 pub fn stream_spec(seed: u64, index: u64) -> ResolvedSpec {
+    draw_object(seed, index).0
+}
+
+/// Object `index` of stream `seed`, prepared: the geometry [`stream_spec`] already built
+/// to check the object's size, so building it costs no second preparation.
+pub fn stream_prepared(seed: u64, index: u64) -> Result<Prepared, ObjectError> {
+    match draw_object(seed, index) {
+        (_, Some(p)) => Ok(p),
+        (fallback, None) => prepare(&fallback),
+    }
+}
+
+/// The spec of object `index` of stream `seed` and, unless it is the fallback box, its
+/// preparation.
+fn draw_object(seed: u64, index: u64) -> (ResolvedSpec, Option<Prepared>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(index);
     let unseen = unseen_set();
@@ -254,14 +263,14 @@ pub fn stream_spec(seed: u64, index: u64) -> ResolvedSpec {
             density_kg_m3: None,
             friction,
         };
-        let Some((e, volume)) = extents(&spec, seed) else {
+        let Some((p, e)) = prepared(&spec, seed) else {
             continue;
         };
         let s = width / e[0].min(e[1]);
         if !(s.is_finite() && s > 0.0) {
             continue;
         }
-        let mass = (rho * volume * s.powi(3)).clamp(MASS_KG.0, MASS_KG.1);
+        let mass = (rho * p.volume_m3 * s.powi(3)).clamp(MASS_KG.0, MASS_KG.1);
         let out = ObjectSpec {
             shape: scaled(spec.shape, s),
             mass_kg: Some(mass),
@@ -269,12 +278,12 @@ pub fn stream_spec(seed: u64, index: u64) -> ResolvedSpec {
         };
         // The scaled shape is built again and checked: its rest face can differ from the
         // unscaled one's where two faces are nearly equally stable.
-        match extents(&out, seed) {
-            Some((e, _)) if fits(e) => return resolved(out, seed),
+        match prepared(&out, seed) {
+            Some((p, e)) if fits(e) => return (resolved(out, seed), Some(p)),
             _ => continue,
         }
     }
-    resolved(
+    let fallback = resolved(
         ObjectSpec {
             name,
             kind: ObjectKind::Procedural,
@@ -286,7 +295,8 @@ pub fn stream_spec(seed: u64, index: u64) -> ResolvedSpec {
             friction: 0.8,
         },
         seed,
-    )
+    );
+    (fallback, None)
 }
 
 /// Objects `0..count` of stream `seed`.

@@ -130,10 +130,8 @@ fn scale_shape(shape: &SharedShape, s: f32) -> Option<SharedShape> {
             c.radius * s,
         )),
         TypedShape::Cylinder(c) => Some(SharedShape::cylinder(c.half_height * s, c.radius * s)),
-        TypedShape::ConvexPolyhedron(p) => {
-            let pts: Vec<Vector> = p.points().iter().map(|q| *q * s).collect();
-            SharedShape::convex_hull(&pts)
-        }
+        // Scales the points and keeps the topology: no new hull is computed.
+        TypedShape::ConvexPolyhedron(p) => p.clone().scaled(Vector::splat(s)).map(SharedShape::new),
         _ => None,
     }
 }

@@ -7,7 +7,7 @@ use super::{plot, tfevents, TrainError};
 use crate::env::api::{Action, ActionSpec, Env, Step};
 use crate::env::cartpole::CartPole;
 use crate::env::grasp::GraspEnv;
-use crate::env::stream::{ObjectStream, FIRST_TRAINING_INDEX};
+use crate::env::stream::ObjectStream;
 use crate::ppo::{Trainer, UpdateMetrics, CHECKPOINT_FILE};
 use crate::robot::{Robot, Side};
 use crate::sim::SimConfig;
@@ -137,7 +137,7 @@ fn build_envs(cfg: &TrainConfig) -> Result<Built, TrainError> {
             // next ones itself (see `env::stream`).
             let objects = if on_stream {
                 let stream = ObjectStream::new(cfg.env.grasp.stream.clone());
-                stream.object(FIRST_TRAINING_INDEX).map(|o| vec![o])
+                stream.first_object().map(|o| vec![o])
             } else {
                 object_set(&cfg.objects)
             }
