@@ -278,6 +278,20 @@ fn grasp_env_with_primitives_runs_one_update() {
         !e.status.success() && err.contains("randomization.friction"),
         "{err}"
     );
+    let bad = write(
+        tmp.path(),
+        "greuse.toml",
+        &format!("{text}[env.stream]\nreuse = 0\n"),
+    );
+    let e = grasp(&[
+        "train",
+        "--config",
+        s(&bad),
+        "--out",
+        s(&tmp.path().join("ru")),
+    ]);
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(!e.status.success() && err.contains("stream.reuse"), "{err}");
 }
 
 #[test]
