@@ -16,7 +16,7 @@ use crate::prelude::MultibodyJoint;
 use crate::utils::mat_to_na;
 use crate::utils::{AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, vect_to_na};
 use na::{
-    self, DMatrix, DVectorView, DVectorViewMut, Dyn, LU, OMatrix, SMatrix, SVector, StorageMut,
+    self, DMatrix, DVectorView, DVectorViewMut, Dyn, OMatrix, SMatrix, SVector, StorageMut,
 };
 
 #[cfg(doc)]
@@ -117,7 +117,7 @@ pub struct Multibody {
     augmented_mass_indices: IndexSequence,
 
     acc_augmented_mass: DMatrix<Real>,
-    acc_inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    acc_inv_augmented_mass: MassFactor,
 
     ndofs: usize,
     pub(crate) root_is_dynamic: bool,
@@ -147,6 +147,16 @@ pub struct Multibody {
     /// Whether the links are in topological order, so that the tree-sparse mass-matrix
     /// products and factorisation apply (else the dense ones are used).
     tree_ordered: bool,
+    /// Per link (patch): `M⁻¹ Bᵀ` (`ndofs x 6` by rows, `B` the link's body Jacobian), computed on
+    /// the first solver row of the link after the Jacobians or the factorisation changed.
+    /// A row of unit wrench `f` on the link then needs `M⁻¹ Bᵀ f` (six columns combined)
+    /// instead of a solve against the mass matrix: a link in contact carries several
+    /// rows (three per contact point).
+    /// The DoF tree (`link_dofs_start` then `link_dofs`) under which `body_jacobians`
+    /// were last built in full (patch).
+    jacobian_chains: Vec<usize>,
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    link_inv_mass_jacobians: Vec<std::sync::OnceLock<Vec<[Real; SPATIAL_DIM]>>>,
 }
 impl Default for Multibody {
     fn default() -> Self {
@@ -172,7 +182,7 @@ impl Multibody {
             augmented_mass: DMatrix::zeros(0, 0),
             inv_augmented_mass: MassFactor::empty(),
             acc_augmented_mass: DMatrix::zeros(0, 0),
-            acc_inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            acc_inv_augmented_mass: MassFactor::empty(),
             augmented_mass_indices: IndexSequence::new(),
             ndofs: 0,
             solver_id: 0,
@@ -185,6 +195,8 @@ impl Multibody {
             link_dofs_start: Vec::new(),
             all_dofs: Vec::new(),
             tree_ordered: false,
+            jacobian_chains: Vec::new(),
+            link_inv_mass_jacobians: Vec::new(),
             root_is_dynamic: false,
             self_contacts_enabled,
             couplings: Vec::new(),
@@ -824,7 +836,108 @@ impl Multibody {
         }
     }
 
+    /// Forgets every link's cached `M⁻¹ Bᵀ` (patch): called whenever the body Jacobians
+    /// or the factorisation change.
+    fn clear_link_inv_mass_jacobians(&mut self) {
+        self.link_inv_mass_jacobians
+            .resize_with(self.links.len(), Default::default);
+        for cell in &mut self.link_inv_mass_jacobians {
+            cell.take();
+        }
+    }
+
+    /// `M⁻¹ Bᵀ` of link `i` by rows (patch), from its body Jacobian and the current
+    /// factorisation.
+    fn link_inv_mass_jacobian(&self, i: usize) -> Vec<[Real; SPATIAL_DIM]> {
+        let n = self.ndofs;
+        let b = self.body_jacobians[i].as_slice();
+        let tree = self.inv_augmented_mass.as_tree();
+        let identity = self.augmented_mass_indices.first_to_remove == IndexSequence::NONE;
+        if let (Some(tree), Some(chain), true) = (tree, self.link_chain(i), identity) {
+            // Each column of `Bᵀ` is zero outside the link's chain: solve on the chain.
+            let mut w = vec![[0.0; SPATIAL_DIM]; n];
+            for &c in chain {
+                w[c].copy_from_slice(&b[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM]);
+            }
+            tree.solve_rows_on_chain(&mut w, chain);
+            return w;
+        }
+        let mut w = self.body_jacobians[i].transpose();
+        self.augmented_mass_indices
+            .with_rearranged_rows_mut(&mut w, |w| {
+                self.inv_augmented_mass.solve_mut(w);
+            });
+        (0..n)
+            .map(|r| core::array::from_fn(|k| w[(r, k)]))
+            .collect()
+    }
+
     fn update_body_jacobians(&mut self) {
+        self.clear_link_inv_mass_jacobians();
+        // Patch: with the DoF tree known, each link's Jacobian is built over its ancestor
+        // chain only; the columns outside it stay the exact zeros that the last full
+        // build under the same tree left there.
+        self.update_dof_tree();
+        let chains_unchanged = self.tree_ordered
+            && self.jacobian_chains.len() == self.link_dofs_start.len() + self.link_dofs.len()
+            && self.jacobian_chains[..self.link_dofs_start.len()] == self.link_dofs_start[..]
+            && self.jacobian_chains[self.link_dofs_start.len()..] == self.link_dofs[..]
+            && self.body_jacobians.iter().all(|j| j.ncols() == self.ndofs);
+        if chains_unchanged {
+            self.update_body_jacobians_on_chains();
+            return;
+        }
+        self.update_body_jacobians_dense();
+        self.jacobian_chains.clear();
+        if self.tree_ordered {
+            self.jacobian_chains.extend_from_slice(&self.link_dofs_start);
+            self.jacobian_chains.extend_from_slice(&self.link_dofs);
+        }
+    }
+
+    /// [`Self::update_body_jacobians`] over each link's chain (patch).
+    fn update_body_jacobians_on_chains(&mut self) {
+        let chain = |i: usize| self.link_dofs_start[i]..self.link_dofs_start[i + 1];
+        for i in 0..self.links.len() {
+            let link = &self.links[i];
+            let cols = &self.link_dofs[chain(i)];
+            let ndofs = link.joint.ndofs();
+            let parent_to_world;
+            if i != 0 {
+                let parent_id = link.parent_internal_id;
+                parent_to_world = self.links[parent_id].local_to_world;
+                let (link_j, parent_j) = self.body_jacobians.index_mut_const(i, parent_id);
+                let shift_tr = vect_to_na(link.shift02).gcross_matrix_tr();
+                for &c in &self.link_dofs[chain(parent_id)] {
+                    let w = parent_j.fixed_view::<ANG_DIM, 1>(DIM, c).into_owned();
+                    let v = parent_j.fixed_view::<DIM, 1>(0, c) + shift_tr * w;
+                    link_j.fixed_view_mut::<DIM, 1>(0, c).copy_from(&v);
+                    link_j.fixed_view_mut::<ANG_DIM, 1>(DIM, c).copy_from(&w);
+                }
+            } else {
+                parent_to_world = Pose::IDENTITY;
+            }
+            let link_j = &mut self.body_jacobians[i];
+            // The link's own DoFs are in its chain but not in its parent's.
+            link_j.columns_mut(link.assembly_id, ndofs).fill(0.0);
+            let mut tmp = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
+            let mut link_joint_j = tmp.columns_mut(0, ndofs);
+            link.joint.jacobian(
+                &(parent_to_world.rotation * link.joint.data.local_frame1.rotation),
+                &mut link_joint_j,
+            );
+            let mut link_j_part = link_j.columns_mut(link.assembly_id, ndofs);
+            link_j_part += link_joint_j;
+            let shift_tr = vect_to_na(link.shift23).gcross_matrix_tr();
+            for &c in cols {
+                let w = link_j.fixed_view::<ANG_DIM, 1>(DIM, c).into_owned();
+                let mut v = link_j.fixed_view_mut::<DIM, 1>(0, c);
+                v += shift_tr * w;
+            }
+        }
+    }
+
+    fn update_body_jacobians_dense(&mut self) {
         for i in 0..self.links.len() {
             let link = &self.links[i];
 
@@ -1162,22 +1275,16 @@ impl Multibody {
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
-        // TODO: avoid allocation inside LU at each timestep.
-        self.acc_inv_augmented_mass = LU::new(
-            self.acc_augmented_mass
-                .view((0, 0), (effective_dim, effective_dim))
-                .into_owned(),
-        );
-        // Patch: the tree-sparse factorisation when no DoF is kinematic (the matrix is then
-        // not rearranged) and the links are in topological order.
+        // The acceleration matrix carries the Coriolis and gyroscopic terms and is not
+        // symmetric: it keeps the dense LU (one solve per step).
+        self.acc_inv_augmented_mass = MassFactor::new(&self.acc_augmented_mass, effective_dim, None);
+        // Patch: the tree-sparse factorisation of the symmetric constraint matrix when no
+        // DoF is kinematic (the matrix is then not rearranged) and the links are in
+        // topological order.
         let tree = (self.tree_ordered && effective_dim == self.ndofs)
             .then_some(self.dof_parent.as_slice());
-        self.inv_augmented_mass = MassFactor::new(
-            self.augmented_mass
-                .view((0, 0), (effective_dim, effective_dim))
-                .into_owned(),
-            tree,
-        );
+        self.inv_augmented_mass = MassFactor::new(&self.augmented_mass, effective_dim, tree);
+        self.clear_link_inv_mass_jacobians();
     }
 
     /// Per-DoF inverse joint-space inertia `diag(M⁻¹)` at the current configuration, where `M`
@@ -1727,8 +1834,24 @@ impl Multibody {
         };
 
         let link = &self.links[link_id];
-        // Patch: the body Jacobian is zero outside the link's ancestor chain.
+        // Patch: the body Jacobian is zero outside the link's ancestor chain, and `M⁻¹ Jᵀ`
+        // of a unit wrench `f` on the link is `(M⁻¹ Bᵀ) f` with the link's cached `M⁻¹ Bᵀ`.
         let chain = self.link_chain(link.internal_id);
+        if let (Some(cols), Some(cell)) = (
+            chain,
+            self.link_inv_mass_jacobians.get(link.internal_id),
+        ) {
+            let w = cell.get_or_init(|| self.link_inv_mass_jacobian(link.internal_id));
+            let result = self.fill_link_jacobian_rows(
+                link.internal_id,
+                cols,
+                w,
+                force.as_vector(),
+                &mut jacobians.as_mut_slice()[*j_id..*j_id + 2 * self.ndofs],
+            );
+            *j_id += self.ndofs * 2;
+            return result;
+        }
         let mut out_j = jacobians.rows_mut(*j_id, self.ndofs);
         match chain {
             Some(cols) => {
@@ -1767,6 +1890,38 @@ impl Multibody {
             }
             None => (j.dot(&invm_j), j.dot(&self.generalized_velocity())),
         }
+    }
+
+    /// The rows of [`Self::fill_jacobians`] for link `i` from its cached `w = M⁻¹ Bᵀ`
+    /// (patch): `out = [J, M⁻¹ Jᵀ]` with `J = Bᵀ f` over the link's chain `cols`; returns
+    /// `(J M⁻¹ Jᵀ, J v)`.
+    fn fill_link_jacobian_rows(
+        &self,
+        i: usize,
+        cols: &[usize],
+        w: &[[Real; SPATIAL_DIM]],
+        f: &SVector<Real, SPATIAL_DIM>,
+        out: &mut [Real],
+    ) -> (Real, Real) {
+        let n = self.ndofs;
+        let (j, invm_j) = out.split_at_mut(n);
+        let bj = self.body_jacobians[i].as_slice();
+        let f: &[Real; SPATIAL_DIM] = &f.data.0[0];
+        // Fixed-size dot products: the compiler unrolls them.
+        let dot = |a: &[Real; SPATIAL_DIM]| (0..SPATIAL_DIM).fold(0.0, |s, k| s + a[k] * f[k]);
+        j.fill(0.0);
+        for &c in cols {
+            if let Ok(b) = bj[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM].try_into() {
+                j[c] = dot(b);
+            }
+        }
+        for (o, wr) in invm_j.iter_mut().zip(w) {
+            *o = dot(wr);
+        }
+        let v = self.velocities.as_slice();
+        cols.iter().fold((0.0, 0.0), |(a, b), &c| {
+            (a + j[c] * invm_j[c], b + j[c] * v[c])
+        })
     }
 
     /// The DoFs on which link `i`'s body Jacobian can be non-zero (patch), when the DoF

@@ -40,10 +40,21 @@ impl MassFactor {
     /// Factors `m` with the tree structure `parent` (the parent DoF of each DoF, or
     /// [`NO_PARENT`]) when `parent` is given and describes a topological order, falling
     /// back to a dense LU otherwise (or when a pivot is not positive).
-    pub fn new(m: DMatrix<Real>, parent: Option<&[usize]>) -> Self {
-        match parent.and_then(|p| TreeLdl::new(&m, p)) {
+    /// Only the leading `dim x dim` block of `m` is factored; the tree factorisation
+    /// needs the whole matrix (`dim == m.nrows()`).
+    pub fn new(m: &DMatrix<Real>, dim: usize, parent: Option<&[usize]>) -> Self {
+        let tree = parent.filter(|_| dim == m.nrows() && dim == m.ncols());
+        match tree.and_then(|p| TreeLdl::new(m, p)) {
             Some(t) => MassFactor::Tree(t),
-            None => MassFactor::Dense(LU::new(m)),
+            None => MassFactor::Dense(LU::new(m.view((0, 0), (dim, dim)).into_owned())),
+        }
+    }
+
+    /// The tree factor, if this is one.
+    pub fn as_tree(&self) -> Option<&TreeLdl> {
+        match self {
+            MassFactor::Tree(t) => Some(t),
+            MassFactor::Dense(_) => None,
         }
     }
 
@@ -69,8 +80,8 @@ impl MassFactor {
 /// `M = Lᵀ D L` of a tree-sparse symmetric positive-definite matrix.
 #[derive(Clone, Debug)]
 pub struct TreeLdl {
-    /// `D`.
-    diag: Vec<Real>,
+    /// `D⁻¹` (the inverse pivots).
+    inv_diag: Vec<Real>,
     /// Row `k` of `L` below the diagonal: the columns `cols[start[k]..start[k + 1]]` (`k`'s
     /// ancestors, nearest first) with the values `vals[..]` at the same positions.
     start: Vec<usize>,
@@ -79,7 +90,7 @@ pub struct TreeLdl {
 }
 
 impl TreeLdl {
-    /// Factors the lower triangle of `m` along `parent`; `None` if `parent` is not a
+    /// Factors the lower triangle of `m` (symmetric) along `parent`; `None` if `parent` is not a
     /// topological order of `m`'s size or a pivot is not positive and finite.
     pub fn new(m: &DMatrix<Real>, parent: &[usize]) -> Option<TreeLdl> {
         let n = m.nrows();
@@ -93,41 +104,59 @@ impl TreeLdl {
         {
             return None;
         }
-        let mut ld = m.clone();
+        // Row `k` of `L` below the diagonal holds `k`'s ancestors, nearest first; the
+        // ancestors of an ancestor `i` of `k` are the entries of `k`'s row after `i`, in
+        // the same order as in `i`'s own row. The elimination (from the leaves up) then
+        // works on these rows only, as MuJoCo's `mj_factorM`.
+        let mut diag: Vec<Real> = (0..n).map(|k| m[(k, k)]).collect();
+        let mut nnz = 0;
+        for k in 0..n {
+            let mut i = parent[k];
+            while i != NO_PARENT {
+                nnz += 1;
+                i = parent[i];
+            }
+        }
+        let mut start = Vec::with_capacity(n + 1);
+        let mut cols = Vec::with_capacity(nnz);
+        let mut vals = Vec::with_capacity(nnz);
+        for k in 0..n {
+            start.push(cols.len());
+            let mut i = parent[k];
+            while i != NO_PARENT {
+                cols.push(i);
+                vals.push(m[(k, i)]);
+                i = parent[i];
+            }
+        }
+        start.push(cols.len());
         for k in (0..n).rev() {
-            let dk = ld[(k, k)];
+            let dk = diag[k];
             if !(dk > 0.0 && dk.is_finite()) {
                 return None;
             }
-            let mut i = parent[k];
-            while i != NO_PARENT {
-                let tmp = ld[(k, i)] / dk;
-                let mut j = i;
-                while j != NO_PARENT {
-                    ld[(i, j)] -= tmp * ld[(k, j)];
-                    j = parent[j];
+            let (sk, ek) = (start[k], start[k + 1]);
+            for a in sk..ek {
+                let i = cols[a];
+                let lki = vals[a];
+                let tmp = lki / dk;
+                diag[i] -= tmp * lki;
+                // `i`'s row and the rest of `k`'s row list the same ancestors; `i < k`,
+                // so `i`'s row lies before `k`'s.
+                let si = start[i];
+                let (head, tail) = vals.split_at_mut(sk);
+                for (x, &y) in head[si..si + (ek - a - 1)].iter_mut().zip(&tail[a + 1 - sk..]) {
+                    *x -= tmp * y;
                 }
-                ld[(k, i)] = tmp;
-                i = parent[i];
+                vals[a] = tmp;
             }
         }
-        let mut t = TreeLdl {
-            diag: (0..n).map(|k| ld[(k, k)]).collect(),
-            start: Vec::with_capacity(n + 1),
-            cols: Vec::new(),
-            vals: Vec::new(),
-        };
-        for k in 0..n {
-            t.start.push(t.cols.len());
-            let mut i = parent[k];
-            while i != NO_PARENT {
-                t.cols.push(i);
-                t.vals.push(ld[(k, i)]);
-                i = parent[i];
-            }
-        }
-        t.start.push(t.cols.len());
-        Some(t)
+        Some(TreeLdl {
+            inv_diag: diag.iter().map(|d| 1.0 / d).collect(),
+            start,
+            cols,
+            vals,
+        })
     }
 
     /// Solves `M x = b` in place for one column.
@@ -135,28 +164,115 @@ impl TreeLdl {
     where
         S2: StorageMut<Real, R2, na::U1>,
     {
-        let n = self.diag.len();
-        let row = |k: usize| {
-            let r = self.start[k]..self.start[k + 1];
-            self.cols[r.clone()].iter().zip(&self.vals[r])
-        };
-        // Lᵀ y = b, from the leaves up.
+        // The sweeps run on a contiguous copy: indexing a generic (possibly strided)
+        // column costs several times the arithmetic of the sweeps themselves.
+        const STACK: usize = 64;
+        let n = self.inv_diag.len();
+        if n <= STACK {
+            let mut buf = [0.0; STACK];
+            for (k, b) in buf[..n].iter_mut().enumerate() {
+                *b = x[k];
+            }
+            self.solve_slice(&mut buf[..n]);
+            for (k, b) in buf[..n].iter().enumerate() {
+                x[k] = *b;
+            }
+        } else {
+            let mut buf: Vec<Real> = (0..n).map(|k| x[k]).collect();
+            self.solve_slice(&mut buf);
+            for (k, b) in buf.iter().enumerate() {
+                x[k] = *b;
+            }
+        }
+    }
+
+    /// Solves `M x = b` in place for `x` of the matrix's size.
+    pub fn solve_slice(&self, x: &mut [Real]) {
+        let n = self.inv_diag.len();
+        assert_eq!(x.len(), n, "TreeLdl::solve_slice: wrong length");
+        // Lᵀ y = b, from the leaves up (a zero entry adds nothing to its ancestors).
         for k in (0..n).rev() {
+            self.up_sweep(x, k);
+        }
+        self.down_sweep(x);
+    }
+
+    /// [`TreeLdl::solve_slice`] for a `b` that is zero outside `chain`: a DoF and all its
+    /// ancestors, listed from the DoF to the root (descending indices), as the body
+    /// Jacobian of a link is. The sweep from the leaves up then stays on the chain.
+    pub fn solve_slice_on_chain(&self, x: &mut [Real], chain: &[usize]) {
+        let n = self.inv_diag.len();
+        assert_eq!(x.len(), n, "TreeLdl::solve_slice_on_chain: wrong length");
+        for &k in chain {
+            self.up_sweep(x, k);
+        }
+        self.down_sweep(x);
+    }
+
+    /// [`TreeLdl::solve_slice_on_chain`] for `D` right-hand sides at once, stored by rows
+    /// (`x[k]` holds DoF `k` of every column), each zero outside `chain`: one pass over
+    /// `L` serves all `D` columns.
+    pub fn solve_rows_on_chain<const D: usize>(&self, x: &mut [[Real; D]], chain: &[usize]) {
+        let n = self.inv_diag.len();
+        assert_eq!(x.len(), n, "TreeLdl::solve_rows_on_chain: wrong length");
+        for &k in chain {
             let xk = x[k];
-            if xk != 0.0 {
-                for (&i, &l) in row(k) {
-                    x[i] -= l * xk;
+            let (cols, vals) = self.row(k);
+            for (&i, &l) in cols.iter().zip(vals) {
+                // SAFETY: `i < k < n` (see `up_sweep`).
+                let xi = unsafe { x.get_unchecked_mut(i) };
+                for (a, b) in xi.iter_mut().zip(&xk) {
+                    *a -= l * b;
                 }
             }
         }
-        // D z = y, then L x = z from the root down.
         for k in 0..n {
-            let mut acc = x[k] / self.diag[k];
-            for (&i, &l) in row(k) {
-                acc -= l * x[i];
+            let mut acc = x[k].map(|v| v * self.inv_diag[k]);
+            let (cols, vals) = self.row(k);
+            for (&i, &l) in cols.iter().zip(vals) {
+                // SAFETY: as above.
+                let xi = unsafe { x.get_unchecked(i) };
+                for (a, b) in acc.iter_mut().zip(xi) {
+                    *a -= l * b;
+                }
             }
             x[k] = acc;
         }
+    }
+
+    /// Subtracts `x[k]` times row `k` of `L` from `k`'s ancestors.
+    #[inline(always)]
+    fn up_sweep(&self, x: &mut [Real], k: usize) {
+        let xk = x[k];
+        if xk != 0.0 {
+            let (cols, vals) = self.row(k);
+            for (&i, &l) in cols.iter().zip(vals) {
+                // SAFETY: `i` is an ancestor of `k < n = x.len()`, so `i < k` (checked
+                // when the factor was built).
+                unsafe { *x.get_unchecked_mut(i) -= l * xk };
+            }
+        }
+    }
+
+    /// `D z = y`, then `L x = z` from the root down.
+    #[inline(always)]
+    fn down_sweep(&self, x: &mut [Real]) {
+        for k in 0..x.len() {
+            let (cols, vals) = self.row(k);
+            let mut acc = x[k] * self.inv_diag[k];
+            for (&i, &l) in cols.iter().zip(vals) {
+                // SAFETY: as in `up_sweep`, `i < k < x.len()`.
+                acc -= l * unsafe { *x.get_unchecked(i) };
+            }
+            x[k] = acc;
+        }
+    }
+
+    /// Row `k` of `L` below the diagonal: its columns and values.
+    #[inline(always)]
+    fn row(&self, k: usize) -> (&[usize], &[Real]) {
+        let r = self.start[k]..self.start[k + 1];
+        (&self.cols[r.clone()], &self.vals[r])
     }
 }
 
@@ -295,6 +411,34 @@ mod tests {
     }
 
     #[test]
+    fn chain_solve_matches_full_solve() {
+        let p = tree();
+        let m = tree_spd(&p);
+        let t = TreeLdl::new(&m, &p).expect("SPD tree matrix");
+        // A right-hand side zero outside DoF 4 and its ancestors, listed leaf first.
+        let mut chain = vec![4];
+        while p[*chain.last().unwrap()] != NO_PARENT {
+            chain.push(p[*chain.last().unwrap()]);
+        }
+        let mut b = vec![0.0; p.len()];
+        for (k, &c) in chain.iter().enumerate() {
+            b[c] = 1.0 + k as Real;
+        }
+        let mut full = b.clone();
+        t.solve_slice(&mut full);
+        let mut on_chain = b.clone();
+        t.solve_slice_on_chain(&mut on_chain, &chain);
+        assert_eq!(full, on_chain);
+        let mut rows: Vec<[Real; 2]> = b.iter().map(|&v| [v, 2.0 * v]).collect();
+        t.solve_rows_on_chain(&mut rows, &chain);
+        for (r, f) in rows.iter().zip(&full) {
+            assert!((r[0] - f).abs() < 1e-6 && (r[1] - 2.0 * f).abs() < 1e-5);
+        }
+        let r = &m * na::DVector::from_vec(full) - na::DVector::from_vec(b);
+        assert!(r.amax() < 1e-4, "residual {r}");
+    }
+
+    #[test]
     fn bad_orders_and_pivots_fall_back_to_dense() {
         let m = tree_spd(&tree());
         // A parent after its child is not a topological order.
@@ -303,7 +447,12 @@ mod tests {
         bad[(4, 4)] = -1.0;
         assert!(TreeLdl::new(&bad, &tree()).is_none());
         assert!(matches!(
-            MassFactor::new(bad, Some(&tree())),
+            MassFactor::new(&bad, 5, Some(&tree())),
+            MassFactor::Dense(_)
+        ));
+        // A leading block is factored densely.
+        assert!(matches!(
+            MassFactor::new(&m, 3, Some(&tree())),
             MassFactor::Dense(_)
         ));
     }
