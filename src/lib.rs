@@ -20,6 +20,8 @@
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 //! - [`run`]: grasp attempts on a hand-arm system: the simulator behind the hardware
 //!   interface, tactile calibration and the grasp pipeline of Sec. V-B.
+//! - `python` (feature `python`): the PyO3 module `grasp_rl._core`, a thin layer over
+//!   [`env`](mod@env) that the `grasp_rl` package (`python/`) exposes to gymnasium.
 
 pub mod env;
 pub mod eval;
@@ -28,6 +30,8 @@ pub mod hardware;
 pub mod objects;
 pub mod policy;
 pub mod ppo;
+#[cfg(feature = "python")]
+pub mod python;
 pub mod robot;
 pub mod run;
 pub mod sim;

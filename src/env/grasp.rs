@@ -329,9 +329,20 @@ impl GraspEnv {
         self.curriculum.rate()
     }
 
+    /// Empties the curriculum's success window, as in a new environment: the next
+    /// episodes' start poses are those a fresh environment draws from the same seeds.
+    pub fn restart_curriculum(&mut self) {
+        self.curriculum = Curriculum::new(self.cfg.curriculum.clone());
+    }
+
     /// The objects of this environment (name, simulator description).
     pub fn objects(&self) -> &[(String, ObjectSpec)] {
         &self.objects
+    }
+
+    /// The name of the current (or last) episode's object.
+    pub fn episode_object(&self) -> &str {
+        &self.objects[self.episode_object].0
     }
 
     /// The summary of the last finished episode.

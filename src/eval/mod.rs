@@ -79,7 +79,14 @@ impl PolicyAgent {
         }
     }
 
-    fn try_act(&mut self, obs: &[f32]) -> candle_core::Result<Action> {
+    /// The policy's obs_dim and number of continuous action components.
+    pub fn dims(&self) -> (usize, usize) {
+        let p = &self.policy.policy;
+        (p.obs_dim(), p.action_spec().continuous)
+    }
+
+    /// The action for `obs`, or the network's error ([`Agent::act`] lifts instead).
+    pub fn try_act(&mut self, obs: &[f32]) -> candle_core::Result<Action> {
         let x = self.policy.normalize(obs);
         let d = x.len();
         let t = Tensor::from_vec(x, (1, 1, d), &Device::Cpu)?;

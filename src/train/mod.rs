@@ -10,6 +10,8 @@
 //!   the config beside them;
 //! - `learning_curve.svg`: success rate and return against transitions ([`plot`]).
 //!
+//! [`envs`] builds a config's environments (the Python module builds its own there too).
+//!
 //! Every file is replaced atomically, so a run killed at any moment (even `kill -9`) can be
 //! continued with [`TrainSession::open`]`(.., resume = true)`: the metrics rows after the
 //! latest checkpoint's update are dropped and training continues from that checkpoint.
@@ -26,6 +28,7 @@
 //! ```
 
 pub mod config;
+pub mod envs;
 pub mod metrics;
 pub mod objects;
 pub mod plot;

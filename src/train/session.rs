@@ -1,20 +1,13 @@
 //! A training run in its run folder: environments, trainer, metrics, checkpoints, plots.
 
-use super::config::{EnvKind, TrainConfig};
+use super::config::TrainConfig;
+use super::envs::{build_envs, CurriculumLevels, TrainEnvs};
 use super::metrics::{self, MetricsRow};
-use super::objects::object_set;
 use super::{plot, tfevents, TrainError};
-use crate::env::api::{Action, ActionSpec, Env, Step};
-use crate::env::cartpole::CartPole;
-use crate::env::grasp::GraspEnv;
-use crate::env::stream::ObjectStream;
 use crate::ppo::{Trainer, UpdateMetrics, CHECKPOINT_FILE};
-use crate::robot::{Robot, Side};
-use crate::sim::SimConfig;
-use crate::synergy::SynergyModel;
 use crate::util::fsx::write_atomic;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
@@ -42,137 +35,6 @@ pub fn latest_dir(dir: &Path) -> PathBuf {
 /// The best checkpoint folder of run folder `dir`.
 pub fn best_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoints").join("best")
-}
-
-/// The environments' curriculum levels, shared with the training loop.
-#[derive(Debug)]
-struct CurriculumProbe {
-    rates: Vec<AtomicU64>,
-}
-
-impl CurriculumProbe {
-    fn mean(&self) -> f64 {
-        let s: f64 = self
-            .rates
-            .iter()
-            .map(|r| f64::from_bits(r.load(Ordering::Relaxed)))
-            .sum();
-        s / self.rates.len().max(1) as f64
-    }
-}
-
-/// A grasp environment that publishes its curriculum rate after every reset and step.
-struct ProbedGrasp {
-    env: GraspEnv,
-    probe: Arc<CurriculumProbe>,
-    index: usize,
-}
-
-impl ProbedGrasp {
-    fn publish(&self) {
-        self.probe.rates[self.index].store(self.env.curriculum_rate().to_bits(), Ordering::Relaxed);
-    }
-}
-
-impl Env for ProbedGrasp {
-    fn obs_dim(&self) -> usize {
-        self.env.obs_dim()
-    }
-    fn action_spec(&self) -> ActionSpec {
-        self.env.action_spec()
-    }
-    fn reset(&mut self, seed: u64) -> Vec<f32> {
-        let o = self.env.reset(seed);
-        self.publish();
-        o
-    }
-    fn step(&mut self, a: &Action) -> Step {
-        let s = self.env.step(a);
-        self.publish();
-        s
-    }
-}
-
-/// Loads the synergy model of `cfg`, checking that it exists, keeping its first
-/// `n_components` components (a model with fewer is an error).
-pub fn load_synergy(cfg: &TrainConfig) -> Result<SynergyModel, TrainError> {
-    let path = &cfg.synergy;
-    if !path.exists() {
-        return Err(TrainError::SynergyMissing { path: path.clone() });
-    }
-    let model = SynergyModel::load(path)?;
-    if model.n_components() < cfg.n_components {
-        return Err(TrainError::SynergyComponents {
-            path: path.clone(),
-            found: model.n_components(),
-            wanted: cfg.n_components,
-        });
-    }
-    Ok(model.truncated(cfg.n_components)?)
-}
-
-type Built = (
-    Vec<Box<dyn Env>>,
-    Option<Arc<CurriculumProbe>>,
-    Option<SynergyModel>,
-);
-
-/// Builds the `num_envs` environments of `cfg`.
-fn build_envs(cfg: &TrainConfig) -> Result<Built, TrainError> {
-    match cfg.env.kind {
-        EnvKind::Cartpole => {
-            let envs = (0..cfg.num_envs)
-                .map(|_| Box::new(CartPole::new(cfg.env.cartpole_max_steps)) as Box<dyn Env>)
-                .collect();
-            Ok((envs, None, None))
-        }
-        EnvKind::Grasp => {
-            let model = load_synergy(cfg)?;
-            let sim = match &cfg.sim_config {
-                Some(p) => SimConfig::load(p)?,
-                None => SimConfig::default(),
-            };
-            let on_stream = cfg.objects == crate::objects::stream::STREAM_SET;
-            // On the stream, each environment starts on one stream object and builds the
-            // next ones itself (see `env::stream`).
-            let objects = if on_stream {
-                let stream = ObjectStream::new(cfg.env.grasp.stream.clone());
-                stream.first_object().map(|o| vec![o])
-            } else {
-                object_set(&cfg.objects)
-            }
-            .map_err(|message| TrainError::ConfigValue {
-                path: PathBuf::from(files::CONFIG),
-                field: "objects".into(),
-                message,
-            })?;
-            let robot = Robot::builtin(Side::Left);
-            let probe = Arc::new(CurriculumProbe {
-                rates: (0..cfg.num_envs).map(|_| AtomicU64::new(0)).collect(),
-            });
-            let mut envs: Vec<Box<dyn Env>> = Vec::with_capacity(cfg.num_envs);
-            for index in 0..cfg.num_envs {
-                let mut env = GraspEnv::new(
-                    &robot,
-                    objects.clone(),
-                    model.clone(),
-                    sim.clone(),
-                    cfg.env.grasp.clone(),
-                )?;
-                if on_stream {
-                    env = env.with_stream();
-                }
-                let p = ProbedGrasp {
-                    env,
-                    probe: Arc::clone(&probe),
-                    index,
-                };
-                p.publish();
-                envs.push(Box::new(p));
-            }
-            Ok((envs, Some(probe), Some(model)))
-        }
-    }
 }
 
 /// What the caller sees after each update.
@@ -232,7 +94,7 @@ pub struct TrainSession {
     dir: PathBuf,
     trainer: Trainer,
     rows: Vec<MetricsRow>,
-    probe: Option<Arc<CurriculumProbe>>,
+    levels: Option<CurriculumLevels>,
     synergy_json: Option<String>,
     config_text: String,
     events_path: PathBuf,
@@ -327,7 +189,11 @@ impl TrainSession {
         if !resume && dir.join(files::CONFIG).is_file() {
             discard_unfinished(dir)?;
         }
-        let (envs, probe, model) = build_envs(&cfg)?;
+        let TrainEnvs {
+            envs,
+            levels,
+            synergy: model,
+        } = build_envs(&cfg)?;
         let mut trainer = Trainer::new(cfg.ppo_config(), envs)?;
         let mut rows = Vec::new();
         if resume {
@@ -369,7 +235,7 @@ impl TrainSession {
             dir: dir.to_path_buf(),
             trainer,
             rows,
-            probe,
+            levels,
             config_text,
             events_path,
             t0_unix,
@@ -468,7 +334,7 @@ impl TrainSession {
             approx_kl: m.approx_kl,
             clip_fraction: m.clip_fraction,
             explained_variance: m.explained_variance,
-            curriculum_level: self.probe.as_ref().map(|p| p.mean()),
+            curriculum_level: self.levels.as_ref().map(|p| p.mean()),
             transitions_per_s: m.transitions_per_sec,
             wall_s,
         }
@@ -550,9 +416,9 @@ impl TrainSession {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::robot::Posture;
+    use crate::robot::{Posture, Robot, Side};
     use crate::sim::script;
+    use crate::synergy::SynergyModel;
     use rand::{Rng, SeedableRng};
 
     #[test]
