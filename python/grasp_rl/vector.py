@@ -14,6 +14,7 @@ from gymnasium.vector.utils import batch_space
 
 from . import _core
 from .actions import action_space, encode, observation_space
+from .env import _path
 
 
 class GraspVectorEnv(VectorEnv):
@@ -58,7 +59,7 @@ class GraspVectorEnv(VectorEnv):
             raise ValueError(f"render_mode {render_mode!r}: GraspVectorEnv does not render")
         self.action_format = action_format
         self._core = _core.CoreVecEnv(
-            config=None if config is None else os.fspath(config),
+            config=_path(config),
             objects=objects,
             num_envs=num_envs,
             threads=threads,
