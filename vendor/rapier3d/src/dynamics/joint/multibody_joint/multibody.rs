@@ -147,16 +147,21 @@ pub struct Multibody {
     /// Whether the links are in topological order, so that the tree-sparse mass-matrix
     /// products and factorisation apply (else the dense ones are used).
     tree_ordered: bool,
-    /// Per link (patch): `M⁻¹ Bᵀ` (`ndofs x 6` by rows, `B` the link's body Jacobian), computed on
-    /// the first solver row of the link after the Jacobians or the factorisation changed.
-    /// A row of unit wrench `f` on the link then needs `M⁻¹ Bᵀ f` (six columns combined)
-    /// instead of a solve against the mass matrix: a link in contact carries several
-    /// rows (three per contact point).
     /// The DoF tree (`link_dofs_start` then `link_dofs`) under which `body_jacobians`
     /// were last built in full (patch).
     jacobian_chains: Vec<usize>,
+    /// Per link (patch): `M⁻¹ Bᵀ` (`ndofs x 6` by columns: column `k` at `[k n, (k + 1) n)`,
+    /// `B` the link's body Jacobian), computed on the first solver row of the link after
+    /// the Jacobians or the factorisation changed. A row of unit wrench `f` on the link
+    /// then needs `M⁻¹ Bᵀ f` (six contiguous columns combined) instead of a solve against
+    /// the mass matrix: a link in contact carries several rows (three per contact point).
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
-    link_inv_mass_jacobians: Vec<std::sync::OnceLock<Vec<[Real; SPATIAL_DIM]>>>,
+    link_inv_mass_jacobians: Vec<std::sync::OnceLock<Vec<Real>>>,
+    /// Everything the body Jacobians were last built from (patch): per link, the joint
+    /// frame's world rotation, its shifts, locked axes, DoF offset and parent. Forward
+    /// kinematics runs at the start of every step and again after the integration; when
+    /// nothing changed in between, the Jacobians are kept.
+    jacobian_inputs: Vec<[Real; 14]>,
 }
 impl Default for Multibody {
     fn default() -> Self {
@@ -197,6 +202,7 @@ impl Multibody {
             tree_ordered: false,
             jacobian_chains: Vec::new(),
             link_inv_mass_jacobians: Vec::new(),
+            jacobian_inputs: Vec::new(),
             root_is_dynamic: false,
             self_contacts_enabled,
             couplings: Vec::new(),
@@ -846,30 +852,36 @@ impl Multibody {
         }
     }
 
-    /// `M⁻¹ Bᵀ` of link `i` by rows (patch), from its body Jacobian and the current
+    /// `M⁻¹ Bᵀ` of link `i` by columns (patch), from its body Jacobian and the current
     /// factorisation.
-    fn link_inv_mass_jacobian(&self, i: usize) -> Vec<[Real; SPATIAL_DIM]> {
+    fn link_inv_mass_jacobian(&self, i: usize) -> Vec<Real> {
         let n = self.ndofs;
         let b = self.body_jacobians[i].as_slice();
         let tree = self.inv_augmented_mass.as_tree();
         let identity = self.augmented_mass_indices.first_to_remove == IndexSequence::NONE;
         if let (Some(tree), Some(chain), true) = (tree, self.link_chain(i), identity) {
-            // Each column of `Bᵀ` is zero outside the link's chain: solve on the chain.
+            // Each column of `Bᵀ` is zero outside the link's chain: solve on the chain, six
+            // right-hand sides at once by rows, then store by columns.
             let mut w = vec![[0.0; SPATIAL_DIM]; n];
             for &c in chain {
                 w[c].copy_from_slice(&b[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM]);
             }
             tree.solve_rows_on_chain(&mut w, chain);
-            return w;
+            let mut by_cols = vec![0.0; SPATIAL_DIM * n];
+            for (r, row) in w.iter().enumerate() {
+                for (k, &x) in row.iter().enumerate() {
+                    by_cols[k * n + r] = x;
+                }
+            }
+            return by_cols;
         }
         let mut w = self.body_jacobians[i].transpose();
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut w, |w| {
                 self.inv_augmented_mass.solve_mut(w);
             });
-        (0..n)
-            .map(|r| core::array::from_fn(|k| w[(r, k)]))
-            .collect()
+        // nalgebra stores by columns already.
+        w.as_slice().to_vec()
     }
 
     fn update_body_jacobians(&mut self) {
@@ -883,8 +895,11 @@ impl Multibody {
             && self.jacobian_chains[..self.link_dofs_start.len()] == self.link_dofs_start[..]
             && self.jacobian_chains[self.link_dofs_start.len()..] == self.link_dofs[..]
             && self.body_jacobians.iter().all(|j| j.ncols() == self.ndofs);
+        let inputs_unchanged = self.update_jacobian_inputs();
         if chains_unchanged {
-            self.update_body_jacobians_on_chains();
+            if !inputs_unchanged {
+                self.update_body_jacobians_on_chains();
+            }
             return;
         }
         self.update_body_jacobians_dense();
@@ -893,6 +908,49 @@ impl Multibody {
             self.jacobian_chains.extend_from_slice(&self.link_dofs_start);
             self.jacobian_chains.extend_from_slice(&self.link_dofs);
         }
+    }
+
+    /// Records every input of the body Jacobians besides the DoF tree (patch): per link,
+    /// the rotation its joint Jacobian is taken in, the shifts `shift02` and `shift23`,
+    /// the locked axes, the first DoF and the parent. Returns whether all of them are
+    /// bit for bit those recorded at the previous call.
+    fn update_jacobian_inputs(&mut self) -> bool {
+        let nl = self.links.len();
+        let mut unchanged = self.jacobian_inputs.len() == nl;
+        self.jacobian_inputs.resize(nl, [Real::NAN; 14]);
+        for i in 0..nl {
+            let link = &self.links[i];
+            let parent_rotation = if i == 0 {
+                Pose::IDENTITY.rotation
+            } else {
+                self.links[link.parent_internal_id].local_to_world.rotation
+            };
+            let r = parent_rotation * link.joint.data.local_frame1.rotation;
+            let (a, b) = (link.shift02, link.shift23);
+            // The integers are small: exact in a float's mantissa.
+            let inputs = [
+                r.x,
+                r.y,
+                r.z,
+                r.w,
+                a.x,
+                a.y,
+                a.z,
+                b.x,
+                b.y,
+                b.z,
+                link.joint.data.locked_axes.bits() as Real,
+                link.assembly_id as Real,
+                link.parent_internal_id as Real,
+                link.joint.ndofs() as Real,
+            ];
+            let old = &mut self.jacobian_inputs[i];
+            if old.iter().zip(&inputs).any(|(x, y)| x.to_bits() != y.to_bits()) {
+                unchanged = false;
+                *old = inputs;
+            }
+        }
+        unchanged
     }
 
     /// [`Self::update_body_jacobians`] over each link's chain (patch).
@@ -992,7 +1050,12 @@ impl Multibody {
         if self.ndofs == 0 {
             return; // Nothing to do.
         }
-        self.update_dof_tree();
+        // Patch: forward kinematics, which always precedes this, built the DoF tree;
+        // rebuild it only if the multibody changed since.
+        if self.dof_parent.len() != self.ndofs || self.link_dofs_start.len() != self.links.len() + 1
+        {
+            self.update_dof_tree();
+        }
 
         if self.augmented_mass.ncols() != self.ndofs {
             // TODO: do a resize instead of a full reallocation.
@@ -1051,33 +1114,21 @@ impl Multibody {
                 }
             }
 
-            #[allow(unused_mut)] // mut is needed for 3D but not for 2D.
-            let mut augmented_inertia = rb_inertia;
-
+            // Patch: the acceleration matrix is the mass matrix plus `dt Jᵀ` times the
+            // gyroscopic and Coriolis terms; the mass matrix's quadratic form is computed
+            // once (it is added to the acceleration matrix after the loop), and the
+            // gyroscopic term `Jᵀ [0; dt G J_w]` joins the Coriolis product below.
             #[cfg(feature = "dim3")]
-            {
-                // Derivative of gyroscopic forces.
-                let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
-                    - (rb_inertia * rb.vels.angvel).gcross_matrix();
+            let gyroscopic_matrix = mat_to_na(
+                rb.vels.angvel.gcross_matrix() * rb_inertia
+                    - (rb_inertia * rb.vels.angvel).gcross_matrix(),
+            );
 
-                augmented_inertia += gyroscopic_matrix * dt;
-            }
-
-            // TODO: optimize that (knowing the structure of the augmented inertia matrix).
-            // TODO: this could be better optimized in 2D.
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
-            #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
-            let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
             sparse_quadform(
                 &mut self.augmented_mass,
                 &rb_mass_matrix_wo_gyro,
-                body_jacobian,
-                cols,
-            );
-            sparse_quadform(
-                &mut self.acc_augmented_mass,
-                &rb_mass_matrix,
                 body_jacobian,
                 cols,
             );
@@ -1115,20 +1166,14 @@ impl Multibody {
                     rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
                 )
                 .gcross_matrix_tr();
-                gemm_cols(coriolis_v, 1.0, &dvel_cross, &parent_j_w, cols);
-
                 // JDot/u * qdot
+                let jdot_u_cross = vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr()
+                    + parent_w * shift_cross_tr;
+                // Patch: the three products with the parent's angular Jacobian as one.
                 gemm_cols(
                     coriolis_v,
                     1.0,
-                    &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
-                    &parent_j_w,
-                    cols,
-                );
-                gemm_cols(
-                    coriolis_v,
-                    1.0,
-                    &(parent_w * shift_cross_tr),
+                    &(dvel_cross + jdot_u_cross),
                     &parent_j_w,
                     cols,
                 );
@@ -1176,16 +1221,11 @@ impl Multibody {
 
                 // JDot
                 let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                gemm_cols(coriolis_v, 1.0, &dvel_cross, &rb_j_w, cols);
-
                 // JDot/u * qdot
-                gemm_cols(
-                    coriolis_v,
-                    1.0,
-                    &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
-                    &rb_j_w,
-                    cols,
-                );
+                let jdot_u_cross =
+                    SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr;
+                // Patch: the two products with the link's angular Jacobian as one.
+                gemm_cols(coriolis_v, 1.0, &(dvel_cross + jdot_u_cross), &rb_j_w, cols);
             }
 
             let coriolis_v = &mut self.coriolis_v[i];
@@ -1220,10 +1260,14 @@ impl Multibody {
                     }
                 }
                 gemm_cols(&mut i_coriolis_dt_w, dt, &inertia, coriolis_w, cols);
+                // Patch: the gyroscopic derivative (see above).
+                gemm_cols(&mut i_coriolis_dt_w, dt, &gyroscopic_matrix, &rb_j_w, cols);
             }
 
             sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
         }
+        // Patch: the mass matrix's part of the acceleration matrix (see above).
+        self.acc_augmented_mass += &self.augmented_mass;
 
         /*
          * Damping and armature.
@@ -1275,14 +1319,14 @@ impl Multibody {
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
-        // The acceleration matrix carries the Coriolis and gyroscopic terms and is not
-        // symmetric: it keeps the dense LU (one solve per step).
-        self.acc_inv_augmented_mass = MassFactor::new(&self.acc_augmented_mass, effective_dim, None);
-        // Patch: the tree-sparse factorisation of the symmetric constraint matrix when no
-        // DoF is kinematic (the matrix is then not rearranged) and the links are in
-        // topological order.
+        // Patch: tree-sparse factorisations when no DoF is kinematic (the matrices are
+        // then not rearranged) and the links are in topological order. The acceleration
+        // matrix carries the Coriolis and gyroscopic terms and is not symmetric (a tree
+        // `U D L`); the constraint matrix is (a tree `Lᵀ D L`).
         let tree = (self.tree_ordered && effective_dim == self.ndofs)
             .then_some(self.dof_parent.as_slice());
+        self.acc_inv_augmented_mass =
+            MassFactor::new_unsymmetric(&self.acc_augmented_mass, effective_dim, tree);
         self.inv_augmented_mass = MassFactor::new(&self.augmented_mass, effective_dim, tree);
         self.clear_link_inv_mass_jacobians();
     }
@@ -1893,13 +1937,13 @@ impl Multibody {
     }
 
     /// The rows of [`Self::fill_jacobians`] for link `i` from its cached `w = M⁻¹ Bᵀ`
-    /// (patch): `out = [J, M⁻¹ Jᵀ]` with `J = Bᵀ f` over the link's chain `cols`; returns
-    /// `(J M⁻¹ Jᵀ, J v)`.
+    /// (by columns; patch): `out = [J, M⁻¹ Jᵀ]` with `J = Bᵀ f` over the link's chain
+    /// `cols`; returns `(J M⁻¹ Jᵀ, J v)`.
     fn fill_link_jacobian_rows(
         &self,
         i: usize,
         cols: &[usize],
-        w: &[[Real; SPATIAL_DIM]],
+        w: &[Real],
         f: &SVector<Real, SPATIAL_DIM>,
         out: &mut [Real],
     ) -> (Real, Real) {
@@ -1915,8 +1959,12 @@ impl Multibody {
                 j[c] = dot(b);
             }
         }
-        for (o, wr) in invm_j.iter_mut().zip(w) {
-            *o = dot(wr);
+        // `M⁻¹ Jᵀ = Σ_k f_k w_k` over six contiguous columns, in one pass that the
+        // compiler vectorises.
+        let w: [&[Real]; SPATIAL_DIM] = core::array::from_fn(|k| &w[k * n..(k + 1) * n]);
+        let invm_j = &mut invm_j[..n];
+        for r in 0..n {
+            invm_j[r] = (0..SPATIAL_DIM).fold(0.0, |s, k| s + w[k][r] * f[k]);
         }
         let v = self.velocities.as_slice();
         cols.iter().fold((0.0, 0.0), |(a, b), &c| {

@@ -37,14 +37,30 @@ impl MassFactor {
         MassFactor::Dense(LU::new(DMatrix::zeros(0, 0)))
     }
 
-    /// Factors `m` with the tree structure `parent` (the parent DoF of each DoF, or
-    /// [`NO_PARENT`]) when `parent` is given and describes a topological order, falling
-    /// back to a dense LU otherwise (or when a pivot is not positive).
+    /// Factors the symmetric `m` with the tree structure `parent` (the parent DoF of each
+    /// DoF, or [`NO_PARENT`]) when `parent` is given and describes a topological order,
+    /// falling back to a dense LU otherwise (or when a pivot is not positive).
     /// Only the leading `dim x dim` block of `m` is factored; the tree factorisation
     /// needs the whole matrix (`dim == m.nrows()`).
     pub fn new(m: &DMatrix<Real>, dim: usize, parent: Option<&[usize]>) -> Self {
+        Self::with(m, dim, parent, TreeLdl::new)
+    }
+
+    /// [`MassFactor::new`] for a matrix that has the tree's sparsity but is not symmetric
+    /// (the acceleration matrix, which carries Coriolis and gyroscopic terms): a tree
+    /// `U D L` without pivoting, or the dense LU when a pivot is not positive.
+    pub fn new_unsymmetric(m: &DMatrix<Real>, dim: usize, parent: Option<&[usize]>) -> Self {
+        Self::with(m, dim, parent, TreeLdl::new_unsymmetric)
+    }
+
+    fn with(
+        m: &DMatrix<Real>,
+        dim: usize,
+        parent: Option<&[usize]>,
+        tree_factor: fn(&DMatrix<Real>, &[usize]) -> Option<TreeLdl>,
+    ) -> Self {
         let tree = parent.filter(|_| dim == m.nrows() && dim == m.ncols());
-        match tree.and_then(|p| TreeLdl::new(m, p)) {
+        match tree.and_then(|p| tree_factor(m, p)) {
             Some(t) => MassFactor::Tree(t),
             None => MassFactor::Dense(LU::new(m.view((0, 0), (dim, dim)).into_owned())),
         }
@@ -77,7 +93,9 @@ impl MassFactor {
     }
 }
 
-/// `M = Lᵀ D L` of a tree-sparse symmetric positive-definite matrix.
+/// `M = Lᵀ D L` of a tree-sparse symmetric positive-definite matrix, or `M = U D L` of
+/// one that is not symmetric (`U` unit upper triangular with the transposed sparsity
+/// of `L`).
 #[derive(Clone, Debug)]
 pub struct TreeLdl {
     /// `D⁻¹` (the inverse pivots).
@@ -87,12 +105,20 @@ pub struct TreeLdl {
     start: Vec<usize>,
     cols: Vec<usize>,
     vals: Vec<Real>,
+    /// Column `k` of `U` above the diagonal at the positions of row `k` of `L`; `None`
+    /// for a symmetric matrix (`U = Lᵀ`).
+    upper: Option<Vec<Real>>,
 }
 
 impl TreeLdl {
-    /// Factors the lower triangle of `m` (symmetric) along `parent`; `None` if `parent` is not a
-    /// topological order of `m`'s size or a pivot is not positive and finite.
-    pub fn new(m: &DMatrix<Real>, parent: &[usize]) -> Option<TreeLdl> {
+    /// Row `k` of `L`'s sparsity (`start`, `cols`) with `m`'s entries `(k, i)` and
+    /// `(i, k)` for `k`'s ancestors `i`; `None` if `parent` is not a topological order of
+    /// `m`'s size.
+    #[allow(clippy::type_complexity)]
+    fn gather(
+        m: &DMatrix<Real>,
+        parent: &[usize],
+    ) -> Option<(Vec<usize>, Vec<usize>, Vec<Real>, Vec<Real>)> {
         let n = m.nrows();
         if m.ncols() != n || parent.len() != n {
             return None;
@@ -104,11 +130,6 @@ impl TreeLdl {
         {
             return None;
         }
-        // Row `k` of `L` below the diagonal holds `k`'s ancestors, nearest first; the
-        // ancestors of an ancestor `i` of `k` are the entries of `k`'s row after `i`, in
-        // the same order as in `i`'s own row. The elimination (from the leaves up) then
-        // works on these rows only, as MuJoCo's `mj_factorM`.
-        let mut diag: Vec<Real> = (0..n).map(|k| m[(k, k)]).collect();
         let mut nnz = 0;
         for k in 0..n {
             let mut i = parent[k];
@@ -119,17 +140,75 @@ impl TreeLdl {
         }
         let mut start = Vec::with_capacity(n + 1);
         let mut cols = Vec::with_capacity(nnz);
-        let mut vals = Vec::with_capacity(nnz);
+        let mut lower = Vec::with_capacity(nnz);
+        let mut upper = Vec::with_capacity(nnz);
         for k in 0..n {
             start.push(cols.len());
             let mut i = parent[k];
             while i != NO_PARENT {
                 cols.push(i);
-                vals.push(m[(k, i)]);
+                lower.push(m[(k, i)]);
+                upper.push(m[(i, k)]);
                 i = parent[i];
             }
         }
         start.push(cols.len());
+        Some((start, cols, lower, upper))
+    }
+
+    /// Factors `m`, which has the tree's sparsity but need not be symmetric, as `U D L`
+    /// along `parent`, without pivoting; `None` if `parent` is not a topological order of
+    /// `m`'s size or a pivot is not positive and finite.
+    pub fn new_unsymmetric(m: &DMatrix<Real>, parent: &[usize]) -> Option<TreeLdl> {
+        let n = m.nrows();
+        let (start, cols, mut lower, mut upper) = Self::gather(m, parent)?;
+        let mut diag: Vec<Real> = (0..n).map(|k| m[(k, k)]).collect();
+        // As in `new`, from the leaves up: eliminating `k` subtracts
+        // `m(i, k) m(k, j) / d_k` from every `m(i, j)` with `i`, `j` ancestors of `k`.
+        for k in (0..n).rev() {
+            let dk = diag[k];
+            if !(dk > 0.0 && dk.is_finite()) {
+                return None;
+            }
+            let (sk, ek) = (start[k], start[k + 1]);
+            for a in sk..ek {
+                let i = cols[a];
+                let lki = lower[a] / dk;
+                let uik = upper[a] / dk;
+                diag[i] -= upper[a] * lki;
+                let si = start[i];
+                let (lhead, ltail) = lower.split_at_mut(sk);
+                let (uhead, utail) = upper.split_at_mut(sk);
+                let rest = a + 1 - sk..ek - sk;
+                for (x, &y) in lhead[si..].iter_mut().zip(&ltail[rest.clone()]) {
+                    *x -= uik * y;
+                }
+                for (x, &y) in uhead[si..].iter_mut().zip(&utail[rest]) {
+                    *x -= lki * y;
+                }
+                lower[a] = lki;
+                upper[a] = uik;
+            }
+        }
+        Some(TreeLdl {
+            inv_diag: diag.iter().map(|d| 1.0 / d).collect(),
+            start,
+            cols,
+            vals: lower,
+            upper: Some(upper),
+        })
+    }
+
+    /// Factors the lower triangle of `m` (symmetric) along `parent`; `None` if `parent` is not a
+    /// topological order of `m`'s size or a pivot is not positive and finite.
+    pub fn new(m: &DMatrix<Real>, parent: &[usize]) -> Option<TreeLdl> {
+        let n = m.nrows();
+        // Row `k` of `L` below the diagonal holds `k`'s ancestors, nearest first; the
+        // ancestors of an ancestor `i` of `k` are the entries of `k`'s row after `i`, in
+        // the same order as in `i`'s own row. The elimination (from the leaves up) then
+        // works on these rows only, as MuJoCo's `mj_factorM`.
+        let (start, cols, mut vals, _) = Self::gather(m, parent)?;
+        let mut diag: Vec<Real> = (0..n).map(|k| m[(k, k)]).collect();
         for k in (0..n).rev() {
             let dk = diag[k];
             if !(dk > 0.0 && dk.is_finite()) {
@@ -156,6 +235,7 @@ impl TreeLdl {
             start,
             cols,
             vals,
+            upper: None,
         })
     }
 
@@ -217,7 +297,7 @@ impl TreeLdl {
         assert_eq!(x.len(), n, "TreeLdl::solve_rows_on_chain: wrong length");
         for &k in chain {
             let xk = x[k];
-            let (cols, vals) = self.row(k);
+            let (cols, vals) = self.upper_column(k);
             for (&i, &l) in cols.iter().zip(vals) {
                 // SAFETY: `i < k < n` (see `up_sweep`).
                 let xi = unsafe { x.get_unchecked_mut(i) };
@@ -240,12 +320,12 @@ impl TreeLdl {
         }
     }
 
-    /// Subtracts `x[k]` times row `k` of `L` from `k`'s ancestors.
+    /// Subtracts `x[k]` times column `k` of `U` from `k`'s ancestors.
     #[inline(always)]
     fn up_sweep(&self, x: &mut [Real], k: usize) {
         let xk = x[k];
         if xk != 0.0 {
-            let (cols, vals) = self.row(k);
+            let (cols, vals) = self.upper_column(k);
             for (&i, &l) in cols.iter().zip(vals) {
                 // SAFETY: `i` is an ancestor of `k < n = x.len()`, so `i < k` (checked
                 // when the factor was built).
@@ -274,10 +354,21 @@ impl TreeLdl {
         let r = self.start[k]..self.start[k + 1];
         (&self.cols[r.clone()], &self.vals[r])
     }
+
+    /// Column `k` of `U` above the diagonal: its rows and values (row `k` of `L`
+    /// transposed for a symmetric matrix).
+    #[inline(always)]
+    fn upper_column(&self, k: usize) -> (&[usize], &[Real]) {
+        let r = self.start[k]..self.start[k + 1];
+        let vals = self.upper.as_deref().unwrap_or(&self.vals);
+        (&self.cols[r.clone()], &vals[r])
+    }
 }
 
 /// `out[a][b] += Σ_rs j[r][a] mid[r][s] j[s][b]` over the columns `cols` only: the
-/// quadratic form `jᵀ mid j` of a body Jacobian `j` that is zero outside `cols`.
+/// quadratic form `jᵀ mid j` of a body Jacobian `j` that is zero outside `cols`. `mid`
+/// must be symmetric (a body's mass matrix): each product is computed once for `(a, b)`
+/// and `(b, a)`.
 pub fn sparse_quadform<C: Dim, S>(
     out: &mut DMatrix<Real>,
     mid: &na::SMatrix<Real, { crate::math::SPATIAL_DIM }, { crate::math::SPATIAL_DIM }>,
@@ -286,10 +377,13 @@ pub fn sparse_quadform<C: Dim, S>(
 ) where
     S: na::Storage<Real, na::Const<{ crate::math::SPATIAL_DIM }>, C>,
 {
-    for &b in cols {
+    for (ib, &b) in cols.iter().enumerate() {
         let mjb = mid * j.column(b);
-        for &a in cols {
-            out[(a, b)] += j.column(a).dot(&mjb);
+        out[(b, b)] += j.column(b).dot(&mjb);
+        for &a in &cols[ib + 1..] {
+            let v = j.column(a).dot(&mjb);
+            out[(a, b)] += v;
+            out[(b, a)] += v;
         }
     }
 }
@@ -436,6 +530,61 @@ mod tests {
         }
         let r = &m * na::DVector::from_vec(full) - na::DVector::from_vec(b);
         assert!(r.amax() < 1e-4, "residual {r}");
+    }
+
+    #[test]
+    fn unsymmetric_tree_solve_matches_dense_lu() {
+        let p = tree();
+        let mut m = tree_spd(&p);
+        // A non-symmetric part with the tree's sparsity, as the Coriolis terms add.
+        for (k, &i) in p.iter().enumerate() {
+            if i != NO_PARENT {
+                m[(k, i)] += 0.3 + 0.1 * k as Real;
+                m[(i, k)] -= 0.2;
+            }
+        }
+        m[(4, 0)] += 0.25;
+        assert_ne!(m[(1, 0)], m[(0, 1)]);
+        let t = TreeLdl::new_unsymmetric(&m, &p).expect("tree matrix with positive pivots");
+        let b = na::DVector::<Real>::from_vec(vec![1.0, -2.0, 0.5, 3.0, -1.0]);
+        let mut x = b.clone();
+        t.solve_column(&mut x);
+        let r = &m * &x - &b;
+        assert!(r.amax() < 1e-4, "residual {r}");
+        let mut y = b.clone();
+        LU::new(m.clone()).solve_mut(&mut y);
+        assert!((&x - &y).amax() < 1e-4);
+        // Six right-hand sides by rows, zero outside DoF 2's chain.
+        let chain = [2, 1, 0];
+        let mut rows = vec![[0.0; 2]; 5];
+        for &c in &chain {
+            rows[c] = [1.0 + c as Real, -(c as Real)];
+        }
+        let cols = rows.clone();
+        t.solve_rows_on_chain(&mut rows, &chain);
+        for k in 0..2 {
+            let mut col = na::DVector::<Real>::from_fn(5, |r, _| cols[r][k]);
+            LU::new(m.clone()).solve_mut(&mut col);
+            for r in 0..5 {
+                assert!((rows[r][k] - col[r]).abs() < 1e-4, "({r}, {k})");
+            }
+        }
+        // Symmetric input: the same factor as `new`.
+        let sym = tree_spd(&p);
+        let (a, b) = (
+            TreeLdl::new(&sym, &p).unwrap(),
+            TreeLdl::new_unsymmetric(&sym, &p).unwrap(),
+        );
+        assert_eq!(a.vals, b.vals);
+        assert_eq!(a.inv_diag, b.inv_diag);
+        // A non-positive pivot falls back to the dense LU.
+        let mut bad = m.clone();
+        bad[(3, 3)] = 0.0;
+        bad[(4, 4)] = 0.0;
+        assert!(matches!(
+            MassFactor::new_unsymmetric(&bad, 5, Some(&p)),
+            MassFactor::Dense(_)
+        ));
     }
 
     #[test]

@@ -197,7 +197,10 @@ impl StagedIslandSolver {
             // NOTE: the twist constraint/builder buffers are NOT cleared: they are
             // the persistent constraint cache, preserved (and resized) further
             // below once the chunk layout is known.
-            set.generic_jacobians.fill(0.0);
+            // Patch: `generic_jacobians` is not zeroed (it was, element by element, over its
+            // whole high-water length every step): every row of a generic contact
+            // constraint writes all `2 ndofs` entries of each multibody it touches
+            // (`Multibody::fill_jacobians`), and the solver reads only those.
             set.generic_velocity_constraints.clear();
             set.generic_velocity_constraints_builder.clear();
             set.simd_velocity_coulomb_constraints.clear();
