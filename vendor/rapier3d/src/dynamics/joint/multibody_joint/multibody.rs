@@ -676,21 +676,23 @@ impl Multibody {
                 rb.forces.force - rb_mass * acc.linvel,
                 rb.forces.torque - gyroscopic - rb_inertia * acc.angvel,
             );
-            self.accelerations.gemv_tr(
-                1.0,
-                &self.body_jacobians[i],
-                external_forces.as_vector(),
-                1.0,
-            );
+            // Patch: `Bᵀ f` over the link's chain only (the body Jacobian is zero outside it).
+            let chain = if self.tree_ordered && self.link_dofs_start.len() == self.links.len() + 1
+            {
+                &self.link_dofs[self.link_dofs_start[i]..self.link_dofs_start[i + 1]]
+            } else {
+                &self.all_dofs[..]
+            };
+            let body_j = &self.body_jacobians[i];
+            for &c in chain {
+                self.accelerations[c] += body_j.column(c).dot(external_forces.as_vector());
+            }
 
             if check_implicit_coriolis_divergence {
                 let applied_forces = Force::new(rb.forces.force, rb.forces.torque);
-                pos_forces.gemv_tr(
-                    1.0,
-                    &self.body_jacobians[i],
-                    applied_forces.as_vector(),
-                    1.0,
-                );
+                for &c in chain {
+                    pos_forces[c] += body_j.column(c).dot(applied_forces.as_vector());
+                }
             }
         }
 
@@ -1062,8 +1064,10 @@ impl Multibody {
             self.augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
             self.acc_augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
         } else {
-            self.augmented_mass.fill(0.0);
-            self.acc_augmented_mass.fill(0.0);
+            // Patch: slice fills (a `memset`) instead of nalgebra's element-wise ones, here
+            // and for the copies below.
+            self.augmented_mass.as_mut_slice().fill(0.0);
+            self.acc_augmented_mass.as_mut_slice().fill(0.0);
         }
 
         self.augmented_mass_indices.clear();
@@ -1154,8 +1158,12 @@ impl Multibody {
                 let (coriolis_v, parent_coriolis_v) = self.coriolis_v.index_mut2(i, parent_id);
                 let (coriolis_w, parent_coriolis_w) = self.coriolis_w.index_mut2(i, parent_id);
 
-                coriolis_v.copy_from(parent_coriolis_v);
-                coriolis_w.copy_from(parent_coriolis_w);
+                coriolis_v
+                    .as_mut_slice()
+                    .copy_from_slice(parent_coriolis_v.as_slice());
+                coriolis_w
+                    .as_mut_slice()
+                    .copy_from_slice(parent_coriolis_w.as_slice());
 
                 // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
                 let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
@@ -1207,8 +1215,8 @@ impl Multibody {
                     }
                 }
             } else {
-                self.coriolis_v[i].fill(0.0);
-                self.coriolis_w[i].fill(0.0);
+                self.coriolis_v[i].as_mut_slice().fill(0.0);
+                self.coriolis_w[i].as_mut_slice().fill(0.0);
             }
 
             let coriolis_v = &mut self.coriolis_v[i];
@@ -1267,7 +1275,14 @@ impl Multibody {
             sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
         }
         // Patch: the mass matrix's part of the acceleration matrix (see above).
-        self.acc_augmented_mass += &self.augmented_mass;
+        for (a, m) in self
+            .acc_augmented_mass
+            .as_mut_slice()
+            .iter_mut()
+            .zip(self.augmented_mass.as_slice())
+        {
+            *a += m;
+        }
 
         /*
          * Damping and armature.

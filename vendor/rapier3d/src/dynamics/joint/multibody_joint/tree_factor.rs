@@ -389,29 +389,23 @@ pub fn sparse_quadform<C: Dim, S>(
 }
 
 /// `out[:, c] += alpha · a · b[:, c]` for each column `c` in `cols`, the other columns
-/// left as they are: a small dense matrix times a Jacobian-shaped matrix that is zero
-/// outside `cols` (the Coriolis terms of a link, over its ancestor chain).
-pub fn gemm_cols<R1, C1, SO, SA, SB>(
-    out: &mut Matrix<Real, R1, Dyn, SO>,
+/// left as they are: a small square matrix times a Jacobian-shaped matrix that is zero
+/// outside `cols` (the Coriolis terms of a link, over its ancestor chain). Fixed-size, so
+/// that each column is a few unrolled operations.
+pub fn gemm_cols<const R: usize, SO, SB>(
+    out: &mut Matrix<Real, na::Const<R>, Dyn, SO>,
     alpha: Real,
-    a: &Matrix<Real, R1, C1, SA>,
-    b: &Matrix<Real, C1, Dyn, SB>,
+    a: &na::SMatrix<Real, R, R>,
+    b: &Matrix<Real, na::Const<R>, Dyn, SB>,
     cols: &[usize],
 ) where
-    R1: Dim,
-    C1: Dim,
-    SO: StorageMut<Real, R1, Dyn>,
-    SA: na::Storage<Real, R1, C1>,
-    SB: na::Storage<Real, C1, Dyn>,
+    SO: StorageMut<Real, na::Const<R>, Dyn>,
+    SB: na::Storage<Real, na::Const<R>, Dyn>,
 {
     for &c in cols {
-        for r in 0..a.nrows() {
-            let mut s = 0.0;
-            for k in 0..a.ncols() {
-                s += a[(r, k)] * b[(k, c)];
-            }
-            out[(r, c)] += alpha * s;
-        }
+        let v: na::SVector<Real, R> = b.fixed_view::<R, 1>(0, c).into_owned();
+        let mut o = out.fixed_view_mut::<R, 1>(0, c);
+        o += (a * v) * alpha;
     }
 }
 
