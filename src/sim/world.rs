@@ -625,6 +625,7 @@ impl HandSim {
         params.num_solver_iterations = cfg.substeps;
         params.max_ccd_substeps = cfg.ccd_substeps;
         params.contact_clustering = cfg.contact_clustering;
+        params.normalized_prediction_distance = cfg.prediction_distance as f32;
         let mut sim = HandSim {
             cfg,
             template: sets.clone(),
