@@ -192,12 +192,21 @@ def test_make_vec_and_vector_bad_input():
 def test_shipped_policy_and_baselines():
     p = grasp_rl.Policy.shipped()
     e = grasp_rl.GraspEnv(config_toml=p.config_toml, objects=OBJECTS, difficulty=1.0)
-    ep = grasp_rl.run_episode(e, p, scene_seed=3)
-    assert ep["object"] in OBJECTS.split(",") and ep["steps"] >= 1
-    again = grasp_rl.run_episode(e, p, scene_seed=3)
-    assert again == ep
-    b = e.run_baseline(2, 3)
-    assert b["object"] == ep["object"] and b["steps"] == 1
+    # Six scenes: each episode repeats exactly, the baseline meets the same object, and
+    # an episode without a physics failure took at least one step (the baseline one).
+    # Physics failures (a few % of episodes) end an episode before its first step, so
+    # the policy must succeed on most scenes rather than on one picked scene.
+    successes = 0
+    for seed in range(6):
+        ep = grasp_rl.run_episode(e, p, scene_seed=seed)
+        assert ep["object"] in OBJECTS.split(",")
+        assert ep["physics_failure"] or ep["steps"] >= 1
+        assert grasp_rl.run_episode(e, p, scene_seed=seed) == ep
+        successes += ep["success"]
+        b = e.run_baseline(2, seed)
+        assert b["object"] == ep["object"]
+        assert b["physics_failure"] or b["steps"] == 1
+    assert successes >= 3
     with pytest.raises(ValueError, match="baseline 3"):
         e.run_baseline(3, 0)
     with pytest.raises(ValueError, match="shape"):
