@@ -192,10 +192,11 @@ def test_make_vec_and_vector_bad_input():
 def test_shipped_policy_and_baselines():
     p = grasp_rl.Policy.shipped()
     e = grasp_rl.GraspEnv(config_toml=p.config_toml, objects=OBJECTS, difficulty=1.0)
-    # Six scenes: each episode repeats exactly, the baseline meets the same object, and
-    # an episode without a physics failure took at least one step (the baseline one).
-    # Physics failures (a few % of episodes) end an episode before its first step, so
-    # the policy must succeed on most scenes rather than on one picked scene.
+    # Six scenes: each episode repeats exactly, baseline 2 meets the same object, and an
+    # episode without a physics failure counts at least one step (the baseline exactly
+    # one). A physics failure (a few % of episodes) ends an episode without counting the
+    # step it happened in, so one at the first step leaves 0 steps; hence the policy
+    # must succeed on most of the scenes rather than on one picked scene.
     successes = 0
     for seed in range(6):
         ep = grasp_rl.run_episode(e, p, scene_seed=seed)
