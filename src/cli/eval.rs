@@ -9,7 +9,7 @@ use grasp::env::obs::Modality;
 use grasp::eval::record::{write_index, RecordOptions};
 use grasp::eval::{
     checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
-    AgentSpec,
+    physics_line, AgentSpec,
 };
 use grasp::robot::{Robot, Side};
 use grasp::sim::SimConfig;
@@ -183,6 +183,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
         every: a.rec.record_every,
+        only_failures: a.rec.record_failures,
     });
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?;
@@ -249,11 +250,12 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     }
     let pairs = paired_lines(&paired_with_first(&results));
     let lift_lines: String = results.iter().map(lift_line).collect();
+    let physics_lines: String = results.iter().map(physics_line).collect();
     if g.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     } else if a.markdown {
         print!("{}", markdown_table(&results));
-        print!("\n{lift_lines}");
+        print!("\n{lift_lines}{physics_lines}");
         if !pairs.is_empty() {
             print!("\n{pairs}");
         }
@@ -285,7 +287,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
                 );
             }
         }
-        print!("{lift_lines}{pairs}");
+        print!("{lift_lines}{physics_lines}{pairs}");
     }
     Ok(())
 }

@@ -42,6 +42,10 @@ pub struct RecordArgs {
     /// Physics steps between two recorded frames.
     #[arg(long, default_value_t = 4)]
     pub record_every: u64,
+    /// With --record, keep only the episodes that ended in a physics failure (each
+    /// replay then shows the failure's kind, body pair, depth and step).
+    #[arg(long, requires = "record")]
+    pub record_failures: bool,
 }
 
 impl RecordArgs {

@@ -155,6 +155,9 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
                                     a.rec.record_every,
                                 )?,
                             };
+                            if a.rec.record_failures && !rec.summary.physics_failure {
+                                return Ok((i, rec.summary, None));
+                            }
                             let entry = write_recording(dir, &rec, i).with_context(|| {
                                 format!("writing a recording into {}", dir.display())
                             })?;

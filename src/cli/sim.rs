@@ -124,6 +124,8 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
             "steps": r.steps,
             "lift": r.lift,
             "failure": sim.failure(),
+            "failure_step": sim.failure_step(),
+            "deepest_contact": sim.deepest_contact(),
             "physics_steps": r.physics_steps,
             "sim_seconds": r.sim_time,
             "wall_seconds": wall,
@@ -202,7 +204,22 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         );
     }
     if let Some(f) = sim.failure() {
-        println!("physics failure: {f:?}");
+        println!(
+            "physics failure at physics step {}: {} ({f})",
+            sim.failure_step().unwrap_or(0),
+            f.kind()
+        );
+    }
+    if let Some(c) = sim.deepest_contact() {
+        println!(
+            "deepest object contact: {:.2} mm with {}{} at physics step {}",
+            c.depth * 1e3,
+            c.with,
+            c.part
+                .map(|p| format!(" (object part {p})"))
+                .unwrap_or_default(),
+            c.step
+        );
     }
     match &r.lift {
         Some(l) => println!(

@@ -32,7 +32,10 @@ use super::randomize::Randomization;
 use super::reward;
 use super::stream::{ObjectStream, StreamConfig};
 use crate::robot::{Posture, Robot};
-use crate::sim::{script, HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig, SimError};
+use crate::sim::{
+    script, FailureReport, HandSim, LiftOutcome, ObjectSpec, PhysicsFailure, Scene, SimConfig,
+    SimError,
+};
 use crate::synergy::SynergyModel;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -204,6 +207,12 @@ pub struct EpisodeSummary {
     pub lifted: bool,
     /// The physics failed during the episode.
     pub physics_failure: bool,
+    /// What failed and when (kind, the body pair, depth, physics step), when the
+    /// simulator detected it.
+    pub failure: Option<FailureReport>,
+    /// The deepest penetration of the object by the hand or the table during the
+    /// episode (m; 0 when nothing penetrated), failures below the threshold included.
+    pub deepest_contact: f64,
     /// Stage 1 ended on a fingertip contact (false: trajectory T ended first).
     pub touched_in_stage1: bool,
     /// The thumb's tactile bit when the lift began (false when the episode did not lift).
@@ -464,6 +473,8 @@ impl GraspEnv {
     }
 
     fn finish(&mut self, success: bool, lifted: bool, physics_failure: bool) {
+        let failure = self.sim.failure_report();
+        let physics_failure = physics_failure || failure.is_some();
         if !physics_failure {
             self.curriculum.record(success);
         }
@@ -474,6 +485,8 @@ impl GraspEnv {
             episode_return: self.episode_return,
             lifted,
             physics_failure,
+            failure,
+            deepest_contact: self.sim.deepest_contact().map_or(0.0, |c| c.depth),
             touched_in_stage1: self.touched_in_stage1,
             thumb_contact_at_lift: self.lift_grip.is_some_and(|g| g.0),
             grip_effort: self.lift_grip.map_or(0.0, |g| g.1),
@@ -535,7 +548,18 @@ impl GraspEnv {
         stop_on_touch: bool,
         seed: u64,
     ) -> Result<EpisodeSummary, SimError> {
-        self.reset_scene_from(seed, self.start)?;
+        if let Err(e) = self.reset_scene_from(seed, self.start) {
+            // Refused like a policy episode's scene (see `Env::reset`): a reported
+            // failure, not a run on the previous episode's world.
+            self.sim.fail(PhysicsFailure::RefusedScene {
+                reason: e.to_string(),
+            });
+            self.steps = 0;
+            self.episode_return = 0.0;
+            self.lift_grip = None;
+            self.finish(false, false, true);
+            return Ok(self.last.clone().unwrap_or_else(|| unreachable!()));
+        }
         let (n, per) = self.closing_schedule();
         let mut frozen = [false; 3];
         let mut targets = self.start;
@@ -593,9 +617,16 @@ impl Env for GraspEnv {
 
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         self.stack.clear();
-        if self.reset_scene(seed).is_err() {
+        if let Err(e) = self.reset_scene(seed) {
             // A scene the simulator refuses is reported as a physics failure on the
-            // first step.
+            // first step (never run on the previous episode's final world).
+            self.sim.fail(PhysicsFailure::RefusedScene {
+                reason: e.to_string(),
+            });
+            self.steps = 0;
+            self.episode_return = 0.0;
+            self.touched_in_stage1 = false;
+            self.lift_grip = None;
             self.done = false;
             return self.stack.stacked();
         }

@@ -19,12 +19,14 @@ use crate::env::api::Action;
 use crate::env::grasp::{run_episode, Agent, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError};
 use crate::env::obs::Modality;
 use crate::ppo::LoadedPolicy;
+use crate::sim::{FailureReport, PhysicsFailure};
 use crate::synergy::SynergyModel;
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use record::{RecordOptions, RecordingEntry};
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Wilson score interval for `k` successes in `n` trials at 95 % (z = 1.96): (low, high).
@@ -201,6 +203,57 @@ pub struct ObjectResult {
     pub physics_failures: usize,
     /// Success of each trial, in trial order (trial `t` is the same scene for every agent).
     pub outcomes: Vec<bool>,
+    /// Each trial's deepest object contact (m; 0 when nothing penetrated), in trial order.
+    pub deepest_contacts: Vec<f64>,
+    /// The physics failures, each with its trial, kind, body pair, depth and step.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub failures: Vec<TrialFailure>,
+}
+
+/// One trial's physics failure.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrialFailure {
+    /// The trial (same scene for every agent).
+    pub trial: usize,
+    /// What failed and when; `None` when the simulator recorded no detail.
+    #[serde(flatten)]
+    pub report: Option<FailureReport>,
+}
+
+/// The deepest object contacts of an agent's episodes (m): penetrations of the object by
+/// the hand or the table, below the failure threshold too.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct ContactStats {
+    /// Median over episodes of each episode's deepest contact.
+    pub median: f64,
+    /// 99th percentile (nearest rank).
+    pub p99: f64,
+    /// The deepest of all.
+    pub max: f64,
+    /// Episodes whose deepest contact was over 1 cm.
+    pub over_1cm: usize,
+    /// Share of episodes whose deepest contact was at most 1 cm.
+    pub within_1cm: f64,
+}
+
+impl ContactStats {
+    /// The statistics of per-episode deepest contacts `depths` (m).
+    pub fn of(depths: &[f64]) -> ContactStats {
+        if depths.is_empty() {
+            return ContactStats::default();
+        }
+        let mut d = depths.to_vec();
+        d.sort_by(f64::total_cmp);
+        let rank = |q: f64| d[((q * d.len() as f64).ceil() as usize).clamp(1, d.len()) - 1];
+        let over = d.iter().filter(|&&x| x > 0.01).count();
+        ContactStats {
+            median: rank(0.5),
+            p99: rank(0.99),
+            max: d[d.len() - 1],
+            over_1cm: over,
+            within_1cm: 1.0 - over as f64 / d.len() as f64,
+        }
+    }
 }
 
 /// All results of one agent.
@@ -221,6 +274,12 @@ pub struct AgentResult {
     /// Episodes that ended in a physics failure, over all objects (each one a failed
     /// trial, counted in the success rates).
     pub physics_failures: usize,
+    /// The physics failures by kind (`deep_penetration`, `too_fast`, ...).
+    pub failures_by_kind: BTreeMap<String, usize>,
+    /// The deep-penetration failures by what the object touched (hand link or `table`).
+    pub penetrations_by_body: BTreeMap<String, usize>,
+    /// Each episode's deepest object contact, over all episodes.
+    pub deepest_contact: ContactStats,
     /// How the lifts were made: thumb contact and grip, over every episode that lifted.
     pub lifts: LiftStats,
     /// Wall time (s).
@@ -268,6 +327,60 @@ impl LiftStats {
             mean_grip_dropped: mean(&|e| !e.success),
         }
     }
+}
+
+/// The physics failures of `objects` by kind, and the deep penetrations by what the object
+/// touched.
+fn failure_counts(objects: &[ObjectResult]) -> (BTreeMap<String, usize>, BTreeMap<String, usize>) {
+    let mut kinds = BTreeMap::new();
+    let mut bodies = BTreeMap::new();
+    for f in objects.iter().flat_map(|o| &o.failures) {
+        let kind = f.report.as_ref().map_or("unknown", |r| r.failure.kind());
+        *kinds.entry(kind.to_string()).or_insert(0) += 1;
+        if let Some(FailureReport {
+            failure: PhysicsFailure::DeepPenetration { with, .. },
+            ..
+        }) = &f.report
+        {
+            *bodies.entry(with.clone()).or_insert(0) += 1;
+        }
+    }
+    (kinds, bodies)
+}
+
+/// One line on an agent's physics: failures by kind and body, and the deepest contacts.
+pub fn physics_line(r: &AgentResult) -> String {
+    let n: usize = r.objects.iter().map(|o| o.trials).sum();
+    let mut s = format!(
+        "{}: {} of {n} episodes ended in a physics failure",
+        r.agent, r.physics_failures
+    );
+    if !r.failures_by_kind.is_empty() {
+        let kinds: Vec<String> = r
+            .failures_by_kind
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect();
+        s.push_str(&format!(" ({})", kinds.join(", ")));
+    }
+    if !r.penetrations_by_body.is_empty() {
+        let bodies: Vec<String> = r
+            .penetrations_by_body
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect();
+        s.push_str(&format!("; deep contacts with {}", bodies.join(", ")));
+    }
+    let c = &r.deepest_contact;
+    s.push_str(&format!(
+        "; deepest object contact per episode: median {:.1} mm, 99th percentile {:.1} mm, \
+         max {:.1} mm, {} over 1 cm\n",
+        c.median * 1e3,
+        c.p99 * 1e3,
+        c.max * 1e3,
+        c.over_1cm
+    ));
+    s
 }
 
 /// Seed of trial `trial` on the object named `object`: shared by all agents (common
@@ -334,6 +447,9 @@ pub fn evaluate(
                                 }
                                 (None, None) => unreachable!("a checkpoint agent is built above"),
                             };
+                            if r.only_failures && !rec.summary.physics_failure {
+                                return Ok((rec.summary, None));
+                            }
                             let entry = record::write_recording(&r.dir, &rec, t)?;
                             return Ok((rec.summary, Some(entry)));
                         }
@@ -372,11 +488,26 @@ pub fn evaluate(
             mean_steps: steps as f64 / n.max(1) as f64,
             physics_failures: eps.iter().filter(|e| e.physics_failure).count(),
             outcomes: eps.iter().map(|e| e.success).collect(),
+            deepest_contacts: eps.iter().map(|e| e.deepest_contact).collect(),
+            failures: eps
+                .iter()
+                .enumerate()
+                .filter(|(_, e)| e.physics_failure)
+                .map(|(trial, e)| TrialFailure {
+                    trial,
+                    report: e.failure.clone(),
+                })
+                .collect(),
         });
         recordings.extend(trials.into_iter().filter_map(|t| t.1));
     }
     let mean_rate = objects.iter().map(|o| o.rate).sum::<f64>() / objects.len().max(1) as f64;
     let physics_failures = objects.iter().map(|o| o.physics_failures).sum();
+    let (failures_by_kind, penetrations_by_body) = failure_counts(&objects);
+    let depths: Vec<f64> = objects
+        .iter()
+        .flat_map(|o| o.deepest_contacts.iter().copied())
+        .collect();
     if physics_failures > 0 {
         tracing::warn!(
             "{label}: {physics_failures} of {n_all} episodes ended in a physics failure (a \
@@ -385,6 +516,9 @@ pub fn evaluate(
     }
     Ok(AgentResult {
         physics_failures,
+        failures_by_kind,
+        penetrations_by_body,
+        deepest_contact: ContactStats::of(&depths),
         lifts,
         agent: label,
         mean_rate,
@@ -623,6 +757,8 @@ mod tests {
             episode_return: 0.0,
             lifted,
             physics_failure: false,
+            failure: None,
+            deepest_contact: 0.0,
             touched_in_stage1: true,
             thumb_contact_at_lift: thumb,
             grip_effort: grip,
@@ -665,12 +801,17 @@ mod tests {
                 mean_steps: 1.0,
                 physics_failures: 0,
                 outcomes: vec![true; 8].into_iter().chain([false; 2]).collect(),
+                deepest_contacts: vec![0.0; 10],
+                failures: Vec::new(),
             }],
             mean_rate: 0.8,
             ci95: wilson(8, 10),
             mean_steps: 1.0,
             control_steps_per_s: 3.0,
             physics_failures: 0,
+            failures_by_kind: BTreeMap::new(),
+            penetrations_by_body: BTreeMap::new(),
+            deepest_contact: ContactStats::default(),
             lifts: LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),

@@ -146,6 +146,8 @@ mod tests {
                     mean_steps: 1.0,
                     physics_failures: 0,
                     outcomes: o.to_vec(),
+                    deepest_contacts: vec![0.0; o.len()],
+                    failures: Vec::new(),
                 }
             })
             .collect();
@@ -157,6 +159,9 @@ mod tests {
             mean_steps: 1.0,
             control_steps_per_s: 1.0,
             physics_failures: 0,
+            failures_by_kind: Default::default(),
+            penetrations_by_body: Default::default(),
+            deepest_contact: Default::default(),
             lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),

@@ -39,6 +39,8 @@ pub struct RecordOptions {
     pub dir: PathBuf,
     /// Physics steps between two frames (at least 1).
     pub every: u64,
+    /// Write only the episodes that ended in a physics failure.
+    pub only_failures: bool,
 }
 
 impl RecordOptions {
@@ -47,6 +49,7 @@ impl RecordOptions {
         RecordOptions {
             dir: dir.into(),
             every: 4,
+            only_failures: false,
         }
     }
 }
@@ -308,6 +311,17 @@ fn html_escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// An episode's outcome in words: `success`, `failure`, or the physics failure with its
+/// step (e.g. `physics failure at step 412: 23.1 mm deep contact with rfdistal`).
+pub fn outcome_text(s: &EpisodeSummary) -> String {
+    match (&s.failure, s.success) {
+        (Some(f), _) => format!("physics failure at step {}: {}", f.step, f.failure),
+        (None, _) if s.physics_failure => "physics failure".into(),
+        (None, true) => "success".into(),
+        (None, false) => "failure".into(),
+    }
+}
+
 /// The self-contained replay page of `rec`.
 pub fn episode_html(rec: &EpisodeRecording) -> Result<String, serde_json::Error> {
     let json = script_safe(&serde_json::to_string(rec)?);
@@ -316,11 +330,7 @@ pub fn episode_html(rec: &EpisodeRecording) -> Result<String, serde_json::Error>
         rec.agent,
         rec.object,
         rec.seed,
-        if rec.summary.success {
-            "success"
-        } else {
-            "failure"
-        }
+        outcome_text(&rec.summary)
     ));
     // Placeholders are replaced in an order where no inserted text is scanned again.
     let (head, rest) = TEMPLATE.split_once("__DATA__").unwrap_or((TEMPLATE, ""));
@@ -350,6 +360,8 @@ pub struct RecordingEntry {
     pub seed: u64,
     /// Outcome.
     pub success: bool,
+    /// The outcome in words, a physics failure's kind, body pair, depth and step included.
+    pub outcome: String,
     /// Stage-2 control steps.
     pub steps: usize,
     /// The JSON file's name inside the folder.
@@ -416,6 +428,7 @@ pub fn write_recording(
         trial,
         seed: rec.seed,
         success: rec.summary.success,
+        outcome: outcome_text(&rec.summary),
         steps: rec.summary.steps,
         json,
         html,
@@ -441,7 +454,7 @@ pub fn index_html(entries: &[RecordingEntry]) -> String {
             e.trial,
             e.seed,
             if e.success { "ok" } else { "no" },
-            if e.success { "success" } else { "failure" },
+            html_escape(&e.outcome),
             e.steps,
             html_escape(&e.html),
             html_escape(&e.json)

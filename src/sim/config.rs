@@ -136,6 +136,58 @@ fn default_true() -> bool {
     true
 }
 
+/// The softness of rapier's contact constraints: each contact acts as a spring-damper of
+/// this natural frequency and damping ratio scaled by the pair's effective mass, so under a
+/// steady push `F` it settles at a penetration of about `F / (m_eff (2 pi f)^2)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactConfig {
+    /// Natural frequency (Hz) of contacts between two moving bodies (hand and object);
+    /// rapier's default is 30.
+    #[serde(default = "default_contact_frequency")]
+    pub natural_frequency: f64,
+    /// Damping ratio of those contacts; rapier's default is 10.
+    #[serde(default = "default_contact_damping")]
+    pub damping_ratio: f64,
+    /// Natural frequency (Hz) of contacts with a fixed body (the table); rapier's
+    /// default is 60.
+    #[serde(default = "default_static_contact_frequency")]
+    pub static_natural_frequency: f64,
+    /// Damping ratio of contacts with a fixed body; rapier's default is 10.
+    #[serde(default = "default_contact_damping")]
+    pub static_damping_ratio: f64,
+    /// Check every penetrating contact normal that parry's GJK/EPA returns against the
+    /// shapes' geometry and compute a wrong one again ([`crate::sim::contact`]); off
+    /// (parry's contacts as they are) when absent.
+    #[serde(default)]
+    pub check_normals: bool,
+}
+
+fn default_contact_frequency() -> f64 {
+    30.0
+}
+
+fn default_static_contact_frequency() -> f64 {
+    60.0
+}
+
+fn default_contact_damping() -> f64 {
+    10.0
+}
+
+impl Default for ContactConfig {
+    /// rapier's defaults.
+    fn default() -> Self {
+        ContactConfig {
+            natural_frequency: default_contact_frequency(),
+            damping_ratio: default_contact_damping(),
+            static_natural_frequency: default_static_contact_frequency(),
+            static_damping_ratio: default_contact_damping(),
+            check_normals: false,
+        }
+    }
+}
+
 /// Limits that end an episode with a physics failure.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -190,6 +242,10 @@ pub struct SimConfig {
     /// configs/sim.toml for the measured trade).
     #[serde(default = "default_prediction_distance")]
     pub prediction_distance: f64,
+    /// The softness of contacts (rapier's defaults when the section is absent; see
+    /// configs/sim.toml).
+    #[serde(default)]
+    pub contacts: ContactConfig,
     /// Seconds one control action lasts.
     pub control_period: f64,
     /// Gravity along world z (m/s^2, negative: down).
@@ -301,6 +357,28 @@ impl SimConfig {
                 self.prediction_distance,
                 "must be at most 0.1 m",
             ));
+        }
+        let c = &self.contacts;
+        for (field, v) in [
+            ("contacts.natural_frequency", c.natural_frequency),
+            (
+                "contacts.static_natural_frequency",
+                c.static_natural_frequency,
+            ),
+        ] {
+            pos(field, v)?;
+            if v > 1000.0 {
+                return Err(bad(field, v, "must be at most 1000 Hz"));
+            }
+        }
+        for (field, v) in [
+            ("contacts.damping_ratio", c.damping_ratio),
+            ("contacts.static_damping_ratio", c.static_damping_ratio),
+        ] {
+            pos(field, v)?;
+            if v > 100.0 {
+                return Err(bad(field, v, "must be at most 100"));
+            }
         }
         pos("control_period", self.control_period)?;
         if self.control_period < self.dt {

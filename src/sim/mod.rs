@@ -40,6 +40,7 @@
 
 pub mod bench;
 pub mod config;
+pub mod contact;
 pub mod object;
 pub mod placement;
 pub mod script;
@@ -49,7 +50,9 @@ pub mod world;
 pub use config::SimConfig;
 pub use object::{ConvexParts, ObjectShape, ObjectSpec};
 pub use sensors::Sensors;
-pub use world::{HandSim, LiftOutcome, PhysicsFailure, Scene, SimError};
+pub use world::{
+    FailureReport, HandSim, LiftOutcome, ObjectContact, PhysicsFailure, Scene, SimError,
+};
 
 /// Index of a hand joint name (paper order) known to exist.
 pub(crate) fn hand_index(name: &str) -> usize {

@@ -190,6 +190,15 @@ impl ObjectShape {
         })
     }
 
+    /// Number of collision pieces: 1 for a primitive, the convex parts (support feet
+    /// included) of a library object.
+    pub fn part_count(&self) -> usize {
+        match self {
+            ObjectShape::Library { part_count, .. } => *part_count,
+            _ => 1,
+        }
+    }
+
     /// Volume (m^3).
     pub fn volume(&self) -> f64 {
         match *self {

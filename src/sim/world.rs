@@ -33,6 +33,7 @@
 //! writes the start posture into the joint coordinates and places hand and object.
 
 use super::config::{DriveModel, LimitRows, SimConfig};
+use super::contact::HullContactDispatcher;
 use super::object::{ObjectError, ObjectSpec};
 use super::placement::{hand_root_pose, PlacementError};
 use super::sensors::{near_limit, pd_effort, spring_rest, Sensors};
@@ -106,9 +107,77 @@ pub enum PhysicsFailure {
     DeepPenetration {
         /// Penetration depth (m).
         depth: f64,
+        /// What the object touched there: a hand link's name, or `table`.
+        with: String,
+        /// The object's convex part (index in its decomposition), for compound objects.
+        part: Option<usize>,
     },
     /// The rapier step panicked (caught).
     Panic,
+    /// The simulator refused the episode's scene (the episode never ran).
+    RefusedScene {
+        /// Why, as the simulator's error says.
+        reason: String,
+    },
+}
+
+impl PhysicsFailure {
+    /// The failure's kind as one word (`deep_penetration`, `too_fast`, ...), as its JSON
+    /// `kind` field says.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            PhysicsFailure::NonFinite => "non_finite",
+            PhysicsFailure::TooFast { .. } => "too_fast",
+            PhysicsFailure::ObjectLost { .. } => "object_lost",
+            PhysicsFailure::DeepPenetration { .. } => "deep_penetration",
+            PhysicsFailure::Panic => "panic",
+            PhysicsFailure::RefusedScene { .. } => "refused_scene",
+        }
+    }
+}
+
+impl std::fmt::Display for PhysicsFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PhysicsFailure::NonFinite => write!(f, "non-finite state"),
+            PhysicsFailure::TooFast { speed } => write!(f, "a body at {speed:.1} m/s"),
+            PhysicsFailure::ObjectLost { distance } => {
+                write!(f, "object {distance:.2} m from its start")
+            }
+            PhysicsFailure::DeepPenetration { depth, with, part } => {
+                write!(f, "{:.1} mm deep contact with {with}", depth * 1e3)?;
+                if let Some(p) = part {
+                    write!(f, " (object part {p})")?;
+                }
+                Ok(())
+            }
+            PhysicsFailure::Panic => write!(f, "the physics step panicked"),
+            PhysicsFailure::RefusedScene { reason } => write!(f, "scene refused: {reason}"),
+        }
+    }
+}
+
+/// A physics failure and the physics step (since the reset) at which it was detected.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FailureReport {
+    /// What broke (serialised flat: `kind` and its fields).
+    #[serde(flatten)]
+    pub failure: PhysicsFailure,
+    /// Physics step since the reset.
+    pub step: u64,
+}
+
+/// A contact of the object with the hand or the table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ObjectContact {
+    /// Penetration depth (m; positive inside).
+    pub depth: f64,
+    /// What the object touched: a hand link's name, or `table`.
+    pub with: String,
+    /// The object's convex part (index in its decomposition), for compound objects.
+    pub part: Option<usize>,
+    /// Physics step since the reset at which it was seen.
+    pub step: u64,
 }
 
 /// Where hand and object start an episode.
@@ -267,6 +336,16 @@ fn pose_f32(p: &Isometry3<f64>) -> Pose {
     )
 }
 
+/// A narrow phase with the contact check of [`HullContactDispatcher`] when
+/// `contacts.check_normals` is on, parry's contacts as they are otherwise.
+fn narrow_phase(cfg: &SimConfig) -> NarrowPhase {
+    if cfg.contacts.check_normals {
+        NarrowPhase::with_query_dispatcher(HullContactDispatcher)
+    } else {
+        NarrowPhase::new()
+    }
+}
+
 /// The multibody whose root link is `root` (the hand's), mutably.
 fn hand_multibody_mut(
     set: &mut MultibodyJointSet,
@@ -313,6 +392,12 @@ pub struct HandSim {
     lift_target: f64,
     physics_steps: u64,
     failure: Option<PhysicsFailure>,
+    /// The physics step at which `failure` was detected.
+    failure_step: u64,
+    /// The deepest contact of the object since the reset.
+    deepest: Option<ObjectContact>,
+    /// Each hand collider's link name (for failure reports).
+    collider_links: Vec<(ColliderHandle, String)>,
     recorder: Option<record::FrameRecorder>,
 }
 
@@ -393,6 +478,7 @@ impl HandSim {
         }
         // Mass properties and colliders per body.
         let mut hand_colliders = Vec::new();
+        let mut collider_links = Vec::new();
         let mut distal_colliders: [Vec<ColliderHandle>; 5] = Default::default();
         let groups = InteractionGroups::new(
             HAND_GROUP,
@@ -478,6 +564,7 @@ impl HandSim {
                         &mut sets.bodies,
                     );
                     hand_colliders.push(h);
+                    collider_links.push((h, link.name.clone()));
                     for f in 0..5 {
                         if link_body[robot.hand.distal[f]].map(|x| x.0) == Some(*b) {
                             distal_colliders[f].push(h);
@@ -626,6 +713,14 @@ impl HandSim {
         params.max_ccd_substeps = cfg.ccd_substeps;
         params.contact_clustering = cfg.contact_clustering;
         params.normalized_prediction_distance = cfg.prediction_distance as f32;
+        let c = cfg.contacts;
+        params.contact_softness =
+            SpringCoefficients::new(c.natural_frequency as f32, c.damping_ratio as f32);
+        params.static_contact_softness = SpringCoefficients::new(
+            c.static_natural_frequency as f32,
+            c.static_damping_ratio as f32,
+        );
+        let narrow_phase = narrow_phase(&cfg);
         let mut sim = HandSim {
             cfg,
             template: sets.clone(),
@@ -633,7 +728,7 @@ impl HandSim {
             pipeline: PhysicsPipeline::new(),
             islands: IslandManager::new(),
             broad_phase: DefaultBroadPhase::default(),
-            narrow_phase: NarrowPhase::new(),
+            narrow_phase,
             ccd: CCDSolver::new(),
             soft: SoftBodySet::new(),
             params,
@@ -653,6 +748,9 @@ impl HandSim {
             lift_target: 0.0,
             physics_steps: 0,
             failure: None,
+            failure_step: 0,
+            deepest: None,
+            collider_links,
             recorder: None,
         };
         sim.insert_object(object.clone());
@@ -740,11 +838,13 @@ impl HandSim {
         self.pipeline = PhysicsPipeline::new();
         self.islands = IslandManager::new();
         self.broad_phase = DefaultBroadPhase::default();
-        self.narrow_phase = NarrowPhase::new();
+        self.narrow_phase = narrow_phase(&self.cfg);
         self.ccd = CCDSolver::new();
         self.soft = SoftBodySet::new();
         self.physics_steps = 0;
         self.failure = None;
+        self.failure_step = 0;
+        self.deepest = None;
         // Lift frames: frame1 at the flange position with x along world z; the forearm at
         // `root_pose` when the lift coordinate is 0.
         let up = x_to(&Vector3::z());
@@ -870,6 +970,35 @@ impl HandSim {
         self.failure.as_ref()
     }
 
+    /// The physics step (since the reset) at which [`HandSim::failure`] was detected.
+    pub fn failure_step(&self) -> Option<u64> {
+        self.failure.as_ref().map(|_| self.failure_step)
+    }
+
+    /// [`HandSim::failure`] with its step.
+    pub fn failure_report(&self) -> Option<FailureReport> {
+        self.failure.as_ref().map(|f| FailureReport {
+            failure: f.clone(),
+            step: self.failure_step,
+        })
+    }
+
+    /// The deepest contact of the object (with the hand or the table) seen since the
+    /// reset, penetrations below the failure threshold included; `None` before any
+    /// penetrating contact.
+    pub fn deepest_contact(&self) -> Option<&ObjectContact> {
+        self.deepest.as_ref()
+    }
+
+    /// Ends the episode with `failure` (e.g. a scene the simulator refused), as a
+    /// detected physics failure does: every later step does nothing.
+    pub fn fail(&mut self, failure: PhysicsFailure) {
+        if self.failure.is_none() {
+            self.failure_step = self.physics_steps;
+            self.failure = Some(failure);
+        }
+    }
+
     /// Physics steps since the last reset.
     pub fn physics_steps(&self) -> u64 {
         self.physics_steps
@@ -911,6 +1040,7 @@ impl HandSim {
         } else {
             self.check_physics()
         };
+        self.failure_step = self.physics_steps;
         self.record_step();
         self.failure.is_none()
     }
@@ -970,7 +1100,7 @@ impl HandSim {
         }
     }
 
-    fn check_physics(&self) -> Option<PhysicsFailure> {
+    fn check_physics(&mut self) -> Option<PhysicsFailure> {
         if !self.pipeline.quarantine().is_empty() {
             return Some(PhysicsFailure::NonFinite);
         }
@@ -998,15 +1128,58 @@ impl HandSim {
         if distance > f.max_object_travel {
             return Some(PhysicsFailure::ObjectLost { distance });
         }
-        for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
-            if let Some((_, c)) = pair.find_deepest_contact() {
-                let depth = -(c.dist as f64);
-                if depth > f.max_penetration {
-                    return Some(PhysicsFailure::DeepPenetration { depth });
-                }
+        let max_penetration = f.max_penetration;
+        let deepest = self.deepest_object_contact();
+        if let Some(c) = deepest {
+            if self.deepest.as_ref().is_none_or(|d| c.depth > d.depth) {
+                self.deepest = Some(c.clone());
+            }
+            if c.depth > max_penetration {
+                return Some(PhysicsFailure::DeepPenetration {
+                    depth: c.depth,
+                    with: c.with,
+                    part: c.part,
+                });
             }
         }
         None
+    }
+
+    /// The object's deepest penetrating contact in the current step, with what it touched.
+    fn deepest_object_contact(&self) -> Option<ObjectContact> {
+        let mut best: Option<ObjectContact> = None;
+        for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
+            let Some((m, c)) = pair.find_deepest_contact() else {
+                continue;
+            };
+            let depth = -(c.dist as f64);
+            if depth <= 0.0 || best.as_ref().is_some_and(|b| b.depth >= depth) {
+                continue;
+            }
+            let (other, sub) = if pair.collider1 == self.object_collider {
+                (pair.collider2, m.subshape1)
+            } else {
+                (pair.collider1, m.subshape2)
+            };
+            best = Some(ObjectContact {
+                depth,
+                with: self.collider_name(other),
+                part: (self.object.shape.part_count() > 1).then_some(sub as usize),
+                step: self.physics_steps,
+            });
+        }
+        best
+    }
+
+    /// A collider's name for reports: the hand link it belongs to, or `table`.
+    fn collider_name(&self, h: ColliderHandle) -> String {
+        if h == self.table {
+            return "table".into();
+        }
+        self.collider_links
+            .iter()
+            .find(|(c, _)| *c == h)
+            .map_or_else(|| "unknown".into(), |(_, n)| n.clone())
     }
 
     /// Runs one control period (`control_period / dt` physics steps) with the current

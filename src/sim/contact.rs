@@ -1,0 +1,453 @@
+//! Contact generation checked against the geometry: a query dispatcher for rapier's
+//! narrow phase that rejects contact normals parry's GJK/EPA got wrong.
+//!
+//! # The defect
+//! parry 0.31 builds the contact manifold of two convex shapes (`contact_manifold_pfm_pfm`:
+//! a convex hull against a capsule, a cylinder, a box or another hull) from a normal `n`
+//! found by GJK, warm-started from the previous step's normal, with EPA when the cores
+//! overlap; the two shapes' support features toward `n` are clipped against each other
+//! and each point's depth is measured along `n`. When `n` is wrong the points are too.
+//! Traced on the unseen prism_tri (baseline 1, seed 0, trial 1, physics step 476): the
+//! thumb's proximal phalanx touched the prism's top edge (0.04 mm deep by parry's own cold
+//! query), but GJK, started from the previous normal, returned "closest points" 2.2 mm
+//! deep along a normal through the prism's bottom; the clipped points lay 93-100 mm deep,
+//! the solver pushed on them at its maximum corrective velocity, and the episode ended as
+//! a deep-penetration physics failure. Another (trial 2, step 232): a fingertip 0.1 mm
+//! from the prism along its previous normal got an EPA normal through the far side, 45 mm
+//! deep.
+//!
+//! # The check
+//! For convex shapes, the true contact normal maximises the gap between the two shapes'
+//! supporting planes normal to it, [`separation_along`] (the distance when separated,
+//! minus the penetration depth when overlapping), and along it the gap equals what GJK/EPA
+//! claims. A manifold with a penetrating point is accepted when its exact gap along `n`
+//! is no smaller than its claimed separation nor than the gap along the previous normal
+//! (each within [`NORMAL_TOLERANCE`]); otherwise it is computed again from a cold start,
+//! and of the two the one with the larger exact gap is kept. Two support-point queries per
+//! penetrating pair and step; speculative (separated) contacts are not checked.
+//!
+//! [`HullContactDispatcher`] is parry's [`DefaultQueryDispatcher`] except for these
+//! manifolds; compound shapes dispatch their parts back to it.
+
+use rapier3d::geometry::{ContactData, ContactManifoldData};
+use rapier3d::math::{Pose, Real, Vector};
+use rapier3d::parry::query::details::{
+    contact_manifold_pfm_pfm, contact_manifolds_composite_shape_composite_shape,
+    contact_manifolds_composite_shape_shape, NormalConstraints,
+};
+use rapier3d::parry::query::{
+    ClosestPoints, Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
+    NonlinearRigidMotion, PersistentQueryDispatcher, QueryDispatcher, ShapeCastHit,
+    ShapeCastOptions, ShapeDistance, ShapeIntersection, Unsupported,
+};
+use rapier3d::parry::shape::{PackedFeatureId, PolygonalFeatureMap, Shape, ShapeType, SupportMap};
+
+/// parry's [`DefaultQueryDispatcher`], with the contact manifolds of convex shapes checked
+/// (see the module docs).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct HullContactDispatcher;
+
+/// A shape as a polygonal feature map with its border radius (`None` for balls and
+/// half-spaces, which have manifolds of their own in parry, and non-convex shapes).
+type Features<'a> = (&'a dyn PolygonalFeatureMap, Real);
+
+fn features(shape: &dyn Shape) -> Option<Features<'_>> {
+    if matches!(shape.shape_type(), ShapeType::Ball | ShapeType::HalfSpace) {
+        return None;
+    }
+    shape.as_polygonal_feature_map()
+}
+
+impl QueryDispatcher for HullContactDispatcher {
+    fn intersection_test(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+    ) -> Result<ShapeIntersection, Unsupported> {
+        DefaultQueryDispatcher.intersection_test(pos12, g1, g2)
+    }
+
+    fn distance(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+    ) -> Result<ShapeDistance, Unsupported> {
+        DefaultQueryDispatcher.distance(pos12, g1, g2)
+    }
+
+    fn contact(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        prediction: Real,
+    ) -> Result<Option<Contact>, Unsupported> {
+        DefaultQueryDispatcher.contact(pos12, g1, g2, prediction)
+    }
+
+    fn closest_points(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        max_dist: Real,
+    ) -> Result<ClosestPoints, Unsupported> {
+        DefaultQueryDispatcher.closest_points(pos12, g1, g2, max_dist)
+    }
+
+    fn cast_shapes(
+        &self,
+        pos12: &Pose,
+        local_vel12: Vector,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        options: ShapeCastOptions,
+    ) -> Result<Option<ShapeCastHit>, Unsupported> {
+        DefaultQueryDispatcher.cast_shapes(pos12, local_vel12, g1, g2, options)
+    }
+
+    fn cast_shapes_nonlinear(
+        &self,
+        motion1: &NonlinearRigidMotion,
+        g1: &dyn Shape,
+        motion2: &NonlinearRigidMotion,
+        g2: &dyn Shape,
+        start_time: Real,
+        end_time: Real,
+        stop_at_penetration: bool,
+    ) -> Result<Option<ShapeCastHit>, Unsupported> {
+        DefaultQueryDispatcher.cast_shapes_nonlinear(
+            motion1,
+            g1,
+            motion2,
+            g2,
+            start_time,
+            end_time,
+            stop_at_penetration,
+        )
+    }
+}
+
+type Manifold = ContactManifold<ContactManifoldData, ContactData>;
+
+impl PersistentQueryDispatcher<ContactManifoldData, ContactData> for HullContactDispatcher {
+    fn contact_manifolds(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        prediction: Real,
+        manifolds: &mut Vec<Manifold>,
+        workspace: &mut Option<ContactManifoldsWorkspace>,
+    ) -> Result<(), Unsupported> {
+        // Compounds dispatch their parts back here; other composites (meshes, height
+        // fields, voxels), which the simulator does not use, go to parry's dispatcher.
+        let c1 = g1
+            .as_composite_shape()
+            .filter(|_| g1.as_compound().is_some());
+        let c2 = g2
+            .as_composite_shape()
+            .filter(|_| g2.as_compound().is_some());
+        match (c1, c2) {
+            (Some(a), Some(b)) => contact_manifolds_composite_shape_composite_shape(
+                self, pos12, a, b, prediction, manifolds, workspace,
+            ),
+            (Some(a), None) if g2.is_convex() => contact_manifolds_composite_shape_shape(
+                self, pos12, a, g2, prediction, manifolds, workspace, false,
+            ),
+            (None, Some(b)) if g1.is_convex() => contact_manifolds_composite_shape_shape(
+                self,
+                &pos12.inverse(),
+                b,
+                g1,
+                prediction,
+                manifolds,
+                workspace,
+                true,
+            ),
+            (None, None) if g1.is_convex() && g2.is_convex() => {
+                if manifolds.is_empty() {
+                    manifolds.push(ContactManifold::new());
+                }
+                return self.contact_manifold_convex_convex(
+                    pos12,
+                    g1,
+                    g2,
+                    None,
+                    None,
+                    prediction,
+                    &mut manifolds[0],
+                );
+            }
+            _ => {
+                return DefaultQueryDispatcher
+                    .contact_manifolds(pos12, g1, g2, prediction, manifolds, workspace)
+            }
+        }
+        Ok(())
+    }
+
+    fn contact_manifold_convex_convex(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        normal_constraints1: Option<&dyn NormalConstraints>,
+        normal_constraints2: Option<&dyn NormalConstraints>,
+        prediction: Real,
+        manifold: &mut Manifold,
+    ) -> Result<(), Unsupported> {
+        // Pairs with a manifold of their own in parry (ball, half-space, box-box,
+        // capsule-capsule) and pairs with normal constraints (meshes) stay parry's.
+        let own = matches!(
+            (g1.shape_type(), g2.shape_type()),
+            (ShapeType::Cuboid, ShapeType::Cuboid) | (ShapeType::Capsule, ShapeType::Capsule)
+        );
+        if !own && normal_constraints1.is_none() && normal_constraints2.is_none() {
+            if let (Some(f1), Some(f2)) = (features(g1), features(g2)) {
+                verified_manifold(pos12, &f1, &f2, prediction, manifold);
+                return Ok(());
+            }
+        }
+        DefaultQueryDispatcher.contact_manifold_convex_convex(
+            pos12,
+            g1,
+            g2,
+            normal_constraints1,
+            normal_constraints2,
+            prediction,
+            manifold,
+        )
+    }
+}
+
+/// parry's polygonal-feature manifold of `f1` and `f2`.
+fn pfm_manifold(
+    pos12: &Pose,
+    f1: &Features,
+    f2: &Features,
+    prediction: Real,
+    manifold: &mut Manifold,
+) {
+    let ((p1, r1), (p2, r2)) = (*f1, *f2);
+    contact_manifold_pfm_pfm(pos12, p1, r1, None, p2, r2, None, prediction, manifold);
+}
+
+/// The signed separation of the two (border-dilated) shapes along `n1` (shape 1's frame,
+/// pointing from shape 1 toward shape 2): the gap between their supporting planes normal
+/// to `n1`, negative when they overlap along it. For the true contact normal it equals
+/// the shapes' distance (separated) or minus their penetration depth (overlapping); along
+/// any other direction it is smaller.
+pub fn separation_along(
+    pos12: &Pose,
+    s1: &dyn SupportMap,
+    r1: Real,
+    s2: &dyn SupportMap,
+    r2: Real,
+    n1: Vector,
+) -> Real {
+    let a = s1.local_support_point(n1);
+    let n2 = pos12.rotation.inverse() * -n1;
+    let b = *pos12 * s2.local_support_point(n2);
+    (b - a).dot(n1) - r1 - r2
+}
+
+/// How far (m) GJK/EPA's claimed separation may exceed the exact separation along its
+/// normal, or the exact separation along the previous normal may exceed it, before the
+/// normal is rejected. GJK's closest points in f32 are approximate by a few millimetres
+/// near contact; the defects it catches are centimetres.
+pub const NORMAL_TOLERANCE: Real = 5.0e-3;
+
+/// The signed separation a manifold claims (its GJK/EPA point: the last point, whose
+/// features are unknown) and the exact separation of the shapes along its normal; `None`
+/// for a manifold without that point.
+fn claimed_and_exact(
+    pos12: &Pose,
+    f1: &Features,
+    f2: &Features,
+    manifold: &Manifold,
+) -> Option<(Real, Real)> {
+    let last = manifold.points.last()?;
+    if last.fid1 != PackedFeatureId::UNKNOWN || last.fid2 != PackedFeatureId::UNKNOWN {
+        return None;
+    }
+    let ((p1, r1), (p2, r2)) = (*f1, *f2);
+    let exact = separation_along(pos12, p1, r1, p2, r2, manifold.local_n1);
+    Some((last.dist, exact))
+}
+
+/// Whether `manifold`'s normal is a contact normal: the separation its GJK/EPA point
+/// claims is the exact separation along it, and no smaller than `bound` (the separation
+/// along another direction: the true contact normal maximises the separation along it
+/// over all directions, for separated and penetrating shapes alike). Only manifolds with
+/// a penetrating point are judged; one whose GJK/EPA point was not kept is judged by
+/// `bound` alone.
+fn acceptable(
+    pos12: &Pose,
+    f1: &Features,
+    f2: &Features,
+    manifold: &Manifold,
+    bound: Real,
+) -> bool {
+    // Separated or touching: a speculative contact, whose normal GJK leaves approximate
+    // near the prediction distance, pushes nothing apart.
+    if manifold.points.iter().all(|p| p.dist >= -NORMAL_TOLERANCE) {
+        return true;
+    }
+    match claimed_and_exact(pos12, f1, f2, manifold) {
+        Some((claimed, exact)) => {
+            exact >= claimed - NORMAL_TOLERANCE && exact >= bound - NORMAL_TOLERANCE
+        }
+        None => {
+            let ((p1, r1), (p2, r2)) = (*f1, *f2);
+            separation_along(pos12, p1, r1, p2, r2, manifold.local_n1) >= bound - NORMAL_TOLERANCE
+        }
+    }
+}
+
+/// parry's manifold, checked (see [`acceptable`]): GJK, warm-started from the previous
+/// normal, can return a normal whose claimed separation is not the shapes' separation
+/// along it (traced: a phalanx 0.04 mm into a prism got a normal through the prism's far
+/// side and contact points 9 cm deep), and EPA can settle on a direction of far deeper
+/// overlap than another (traced: a fingertip touching a prism, 0.1 mm along the previous
+/// normal, got a 45 mm deep normal through the other side). Such a manifold is computed
+/// again from a cold start, and of the two the one with the larger exact separation along
+/// its normal is kept.
+fn verified_manifold(
+    pos12: &Pose,
+    f1: &Features,
+    f2: &Features,
+    prediction: Real,
+    manifold: &mut Manifold,
+) {
+    let old = manifold.points.clone();
+    let old_n1 = manifold.local_n1;
+    let ((p1, r1), (p2, r2)) = (*f1, *f2);
+    let bound = old_n1.try_normalize().map_or(Real::NEG_INFINITY, |n| {
+        separation_along(pos12, p1, r1, p2, r2, n)
+    });
+    pfm_manifold(pos12, f1, f2, prediction, manifold);
+    if acceptable(pos12, f1, f2, manifold, bound) {
+        return;
+    }
+    REJECTED.with(|c| c.set(c.get() + 1));
+    let first = manifold.clone();
+    // A cold start: GJK begins along the line between the shapes' origins; a zero cached
+    // normal also stops parry from reusing the old points.
+    manifold.points.clone_from(&old);
+    manifold.local_n1 = Vector::ZERO;
+    manifold.local_n2 = Vector::ZERO;
+    pfm_manifold(pos12, f1, f2, prediction, manifold);
+    if acceptable(pos12, f1, f2, manifold, bound) {
+        return;
+    }
+    FAILED.with(|c| c.set(c.get() + 1));
+    let sep = |m: &Manifold| separation_along(pos12, p1, r1, p2, r2, m.local_n1);
+    if manifold.points.is_empty() || (!first.points.is_empty() && sep(&first) > sep(manifold)) {
+        *manifold = first;
+    }
+}
+
+thread_local! {
+    static REJECTED: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    static FAILED: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Manifolds whose first normal this thread rejected, and those for which no consistent
+/// normal was found (diagnostics).
+pub fn rejection_counts() -> (u64, u64) {
+    (REJECTED.with(|c| c.get()), FAILED.with(|c| c.get()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rapier3d::parry::shape::{ConvexPolyhedron, Cylinder};
+
+    /// The unseen prism_tri's hull (its own frame, bottom face at z = 0).
+    fn prism() -> ConvexPolyhedron {
+        let v = [
+            Vector::new(0.03375, 0.0, 0.0),
+            Vector::new(-0.03375, -0.038971145, 0.0),
+            Vector::new(-0.03375, 0.038971145, 0.0),
+            Vector::new(0.03375, 0.0, 0.06),
+            Vector::new(-0.03375, -0.038971145, 0.06),
+            Vector::new(-0.03375, 0.038971145, 0.06),
+        ];
+        ConvexPolyhedron::from_convex_hull(&v).unwrap()
+    }
+
+    /// The thumb's proximal phalanx (a cylinder) resting on the prism's top edge, as traced
+    /// in baseline 1's episode on prism_tri (seed 0, trial 1, physics step 476), with the
+    /// normal its manifold had in the step before (8.8 mm apart).
+    fn traced() -> (Cylinder, ConvexPolyhedron, Pose, Vector) {
+        let pos12 = Pose::from_parts(
+            Vector::new(0.06729979, 0.05458056, 0.010644151),
+            rapier3d::math::Rotation::from_xyzw(0.7962044, -0.0049737142, -0.28565294, 0.53332615),
+        );
+        let previous_n1 = Vector::new(0.97502846, -1.10831486e-7, -0.22208004);
+        (Cylinder::new(0.019, 0.0085), prism(), pos12, previous_n1)
+    }
+
+    fn deepest(m: &Manifold) -> Real {
+        m.points.iter().map(|p| p.dist).fold(Real::MAX, Real::min)
+    }
+
+    #[test]
+    fn parry_warm_started_manifold_of_the_traced_pair_is_wrong() {
+        // The defect this module removes, as parry 0.31 has it: 9 cm deep points.
+        let (cyl, hull, pos12, n1) = traced();
+        let mut m: Manifold = ContactManifold::new();
+        m.local_n1 = n1;
+        let (f1, r1) = cyl.as_polygonal_feature_map().unwrap();
+        let (f2, r2) = hull.as_polygonal_feature_map().unwrap();
+        contact_manifold_pfm_pfm(&pos12, f1, r1, None, f2, r2, None, 0.01, &mut m);
+        assert!(deepest(&m) < -0.09, "{}", deepest(&m));
+        // Its GJK point claims 2.2 mm, the shapes overlap by centimetres along its normal.
+        let exact = separation_along(&pos12, f1, r1, f2, r2, m.local_n1);
+        assert!(exact < -0.05, "{exact}");
+    }
+
+    #[test]
+    fn dispatcher_manifold_of_the_traced_pair_is_shallow() {
+        let (cyl, hull, pos12, n1) = traced();
+        let mut m: Manifold = ContactManifold::new();
+        m.local_n1 = n1;
+        HullContactDispatcher
+            .contact_manifold_convex_convex(&pos12, &cyl, &hull, None, None, 0.01, &mut m)
+            .unwrap();
+        // parry's exact query (cold start): 0.04 mm deep at the cylinder's far cap.
+        let c = rapier3d::parry::query::contact(&Pose::IDENTITY, &cyl, &pos12, &hull, 0.01)
+            .unwrap()
+            .unwrap();
+        assert!(c.dist > -1e-3, "{c:?}");
+        assert!(!m.points.is_empty());
+        assert!(deepest(&m) > c.dist - 1e-3, "{} vs {}", deepest(&m), c.dist);
+        assert!(
+            m.local_n1.dot(c.normal1) > 0.99,
+            "{:?} vs {:?}",
+            m.local_n1,
+            c.normal1
+        );
+    }
+
+    #[test]
+    fn separation_along_hand_computed() {
+        // Two unit cubes (half extent 0.5) 1.2 apart along x: 0.2 apart along x, and along
+        // the diagonal (1,1,0)/sqrt(2) the support planes overlap.
+        let a = rapier3d::parry::shape::Cuboid::new(Vector::splat(0.5));
+        let pos12 = Pose::from_translation(Vector::new(1.2, 0.0, 0.0));
+        let s = separation_along(&pos12, &a, 0.0, &a, 0.0, Vector::X);
+        assert!((s - 0.2).abs() < 1e-6, "{s}");
+        let d = Vector::new(1.0, 1.0, 0.0).normalize();
+        // a: max (x + y)/sqrt2 = 1/sqrt2; b: min = (1.2 - 1)/sqrt2.
+        let s = separation_along(&pos12, &a, 0.0, &a, 0.0, d);
+        let expect = (0.2 - 1.0) / 2f32.sqrt();
+        assert!((s - expect).abs() < 1e-6, "{s} vs {expect}");
+        // Border radii subtract.
+        let s = separation_along(&pos12, &a, 0.05, &a, 0.1, Vector::X);
+        assert!((s - 0.05).abs() < 1e-6, "{s}");
+    }
+}
