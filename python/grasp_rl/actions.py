@@ -18,7 +18,7 @@ the right shape: anything else raises ``ValueError`` (shape, NaN, missing key) o
 
 Observations are ``Box(-inf, inf, (obs_dim,), float32)``: ``<a_{k-1}, phi, tau, theta>``
 stacked over ``history`` frames (M3 with 5 synergies and 3 frames: 168 values); see the
-README's "Python (grasp_rl)" section.
+docs/python.md.
 """
 
 from __future__ import annotations

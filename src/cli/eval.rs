@@ -6,10 +6,11 @@ use grasp::env::api::Env;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv};
 use grasp::env::obs::Modality;
+use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{write_index, RecordOptions};
 use grasp::eval::{
     checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
-    physics_line, AgentSpec,
+    physics_line, read_results, AgentResult, AgentSpec,
 };
 use grasp::robot::{Robot, Side};
 use grasp::sim::SimConfig;
@@ -22,12 +23,29 @@ use super::Global;
 /// Evaluate agents per object on identical initial poses and print a Table-I-style table.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint.\n\nWith several agents, the first is also compared with each other one trial by trial (every\nagent sees the same start poses): the counts of trials only one of them won and the exact\nMcNemar p-value. --json gives each trial's outcome per object."
+    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n  grasp eval --policy assets/policies/quick_gru_m3_pca5,baseline1,baseline2 --objects unseen --trials 20 --plot unseen.svg\n  grasp eval --from-json eval.json --policy baseline1,baseline2 --labels B1,B2 --plot b.svg\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint.\n\nWith several agents, the first is also compared with each other one trial by trial (every\nagent sees the same start poses): the counts of trials only one of them won and the exact\nMcNemar p-value. --json gives each trial's outcome per object.\n\n--plot draws the per-object success of every agent side by side (horizontal bars with Wilson\n95 % intervals, each agent's mean first, objects sorted by the first agent's margin over the\nbest other agent). --from-json reads the --json output of an earlier evaluation instead of\nrunning one, and prints, compares and plots it again; --policy then picks agents of the file\nby name (baseline1, baseline2 or the name in the file)."
 )]
 pub struct EvalArgs {
     /// Agents: baseline1, baseline2, or a checkpoint folder; repeat or separate by commas.
-    #[arg(long, value_delimiter = ',', required = true)]
+    /// With --from-json: the agents of the file to show (all when absent).
+    #[arg(long, value_delimiter = ',', required_unless_present = "from_json")]
     pub policy: Vec<String>,
+    /// Read the results of an earlier `grasp eval --json` from this file instead of
+    /// evaluating: print, compare and plot them again.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record"])]
+    pub from_json: Option<PathBuf>,
+    /// Draw the per-object success of every agent (Wilson 95 % intervals, means) to this
+    /// SVG file.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Title of the plot (default: the object set and seed, or the --from-json file); the
+    /// number of objects and trials is added.
+    #[arg(long, requires = "plot")]
+    pub plot_title: Option<String>,
+    /// Names of the agents in the outputs, in order, instead of their checkpoint paths
+    /// (one per agent, separated by commas).
+    #[arg(long, value_delimiter = ',')]
+    pub labels: Vec<String>,
     /// Objects: train, unseen, all, a folder of OBJ/STL, a manifest.toml, or names.
     #[arg(long, default_value = "unseen")]
     pub objects: String,
@@ -160,6 +178,87 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
 }
 
 pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
+    if let Some(p) = &a.plot {
+        check_plot_path(p)?;
+    }
+    let (mut results, title) = match &a.from_json {
+        Some(f) => (
+            saved(&a, f)?,
+            format!("Per-object success, {}", f.display()),
+        ),
+        None => (
+            measure(&a, g)?,
+            format!(
+                "Per-object success on '{}', seed {}",
+                a.objects,
+                g.seed.unwrap_or(0)
+            ),
+        ),
+    };
+    if !a.labels.is_empty() {
+        if a.labels.len() != results.len() {
+            bail!(
+                "--labels names {} agents, but there are {}: {}",
+                a.labels.len(),
+                results.len(),
+                results
+                    .iter()
+                    .map(|r| r.agent.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        for (r, l) in results.iter_mut().zip(&a.labels) {
+            r.agent = l.clone();
+        }
+    }
+    if let Some(p) = &a.csv {
+        write_atomic(p, csv_table(&results).as_bytes())?;
+    }
+    if let Some(p) = &a.plot {
+        let title = a.plot_title.clone().unwrap_or(title);
+        write_per_object_plot(p, &title, &results)?;
+        if !g.quiet {
+            eprintln!("wrote the per-object plot to {}", p.display());
+        }
+    }
+    print_results(&a, g, &results)
+}
+
+/// The agents of an earlier `grasp eval --json` in `file`: those named by --policy, in
+/// that order, or all.
+fn saved(a: &EvalArgs, file: &std::path::Path) -> Result<Vec<AgentResult>> {
+    let all = read_results(file)?;
+    if a.policy.is_empty() {
+        return Ok(all);
+    }
+    a.policy
+        .iter()
+        .map(|p| {
+            let name = match p.as_str() {
+                "baseline1" => AgentSpec::Baseline1.label(),
+                "baseline2" => AgentSpec::Baseline2.label(),
+                other => other.to_string(),
+            };
+            all.iter()
+                .find(|r| r.agent == name)
+                .cloned()
+                .with_context(|| {
+                    format!(
+                        "{} holds no agent '{name}'; it holds: {}",
+                        file.display(),
+                        all.iter()
+                            .map(|r| r.agent.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                })
+        })
+        .collect()
+}
+
+/// Runs the evaluation the flags describe.
+fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     if a.trials == 0 {
         bail!("--trials must be at least 1");
     }
@@ -179,7 +278,7 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     };
     let objects = sim_objects(&a.objects)?;
     let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
-    let agents = agent_envs(&a, specs, g)?;
+    let agents = agent_envs(a, specs, g)?;
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
         every: a.rec.record_every,
@@ -245,22 +344,25 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
             );
         }
     }
-    if let Some(p) = &a.csv {
-        write_atomic(p, csv_table(&results).as_bytes())?;
-    }
-    let pairs = paired_lines(&paired_with_first(&results));
+    Ok(results)
+}
+
+/// Prints `results` as the flags ask: JSON, Markdown or text, with the lift statistics and
+/// the paired comparisons with the first agent.
+fn print_results(a: &EvalArgs, g: &Global, results: &[AgentResult]) -> Result<()> {
+    let pairs = paired_lines(&paired_with_first(results));
     let lift_lines: String = results.iter().map(lift_line).collect();
     let physics_lines: String = results.iter().map(physics_line).collect();
     if g.json {
-        println!("{}", serde_json::to_string_pretty(&results)?);
+        println!("{}", serde_json::to_string_pretty(results)?);
     } else if a.markdown {
-        print!("{}", markdown_table(&results));
+        print!("{}", markdown_table(results));
         print!("\n{lift_lines}{physics_lines}");
         if !pairs.is_empty() {
             print!("\n{pairs}");
         }
     } else {
-        for r in &results {
+        for r in results {
             println!(
                 "{}: mean success {:.1} % (95 % CI {:.1}-{:.1}), {:.2} steps per episode, {:.1} control steps/s, {} physics failures",
                 r.agent,

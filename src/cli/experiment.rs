@@ -19,7 +19,7 @@ use super::Global;
 /// (mean success rate over seeds with a min-max band, against transitions) are written.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp experiment --grid configs/grids/tiny_grid.toml --out runs/tiny\n  grasp experiment --grid configs/grids/paper_ablation.toml --budget-minutes 600\n  grasp experiment --grid configs/grids/paper_ablation.toml --resume\n  grasp experiment --grid configs/grids/paper_ablation.toml --resume --report-only --json\n\n--parallel N trains N runs at once with the cores split between them (default: the\ngrid's `parallel`). On 2 shared cores both ways took the same time (README), so the\ngrids run one after another with all threads: each run finishes sooner."
+    after_help = "Examples:\n  grasp experiment --grid configs/grids/tiny_grid.toml --out runs/tiny\n  grasp experiment --grid configs/grids/paper_ablation.toml --budget-minutes 600\n  grasp experiment --grid configs/grids/paper_ablation.toml --resume\n  grasp experiment --grid configs/grids/paper_ablation.toml --resume --report-only --json\n\n--parallel N trains N runs at once with the cores split between them (default: the\ngrid's `parallel`). On 2 shared cores both ways took the same time (docs/experiments.md), so the\ngrids run one after another with all threads: each run finishes sooner."
 )]
 pub struct ExperimentArgs {
     /// The grid file (TOML).

@@ -7,9 +7,12 @@
 //!   `config.toml` saved beside it, so evaluations observe what the policy expects;
 //! - [`paired`](mod@paired): two agents compared trial by trial (exact McNemar test);
 //! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
+//! - [`plot`]: Table I as a picture, per-object success of the agents side by side;
+//! - [`read_results`]: the results of an earlier `grasp eval --json`, to print or plot again;
 //! - [`regression`]: the CI regression check against committed reference figures.
 
 pub mod paired;
+pub mod plot;
 pub mod record;
 pub mod regression;
 
@@ -25,7 +28,7 @@ use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use record::{RecordOptions, RecordingEntry};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -185,7 +188,7 @@ impl AgentSpec {
 }
 
 /// Per-object result of one agent.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ObjectResult {
     /// Object name.
     pub object: String,
@@ -203,15 +206,17 @@ pub struct ObjectResult {
     pub physics_failures: usize,
     /// Success of each trial, in trial order (trial `t` is the same scene for every agent).
     pub outcomes: Vec<bool>,
-    /// Each trial's deepest object contact (m; 0 when nothing penetrated), in trial order.
+    /// Each trial's deepest object contact (m; 0 when nothing penetrated), in trial order
+    /// (empty in evaluations saved before it was recorded).
+    #[serde(default)]
     pub deepest_contacts: Vec<f64>,
     /// The physics failures, each with its trial, kind, body pair, depth and step.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub failures: Vec<TrialFailure>,
 }
 
 /// One trial's physics failure.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialFailure {
     /// The trial (same scene for every agent).
     pub trial: usize,
@@ -222,7 +227,7 @@ pub struct TrialFailure {
 
 /// The deepest object contacts of an agent's episodes (m): penetrations of the object by
 /// the hand or the table, below the failure threshold too.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactStats {
     /// Median over episodes of each episode's deepest contact.
     pub median: f64,
@@ -257,7 +262,7 @@ impl ContactStats {
 }
 
 /// All results of one agent.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AgentResult {
     /// Agent label.
     pub agent: String,
@@ -275,23 +280,26 @@ pub struct AgentResult {
     /// trial, counted in the success rates).
     pub physics_failures: usize,
     /// The physics failures by kind (`deep_penetration`, `too_fast`, ...).
+    #[serde(default)]
     pub failures_by_kind: BTreeMap<String, usize>,
     /// The deep-penetration failures by what the object touched (hand link or `table`).
+    #[serde(default)]
     pub penetrations_by_body: BTreeMap<String, usize>,
     /// Each episode's deepest object contact, over all episodes.
+    #[serde(default)]
     pub deepest_contact: ContactStats,
     /// How the lifts were made: thumb contact and grip, over every episode that lifted.
     pub lifts: LiftStats,
     /// Wall time (s).
     pub wall_s: f64,
     /// Episodes recorded (with `record`), per object then trial.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty", skip_deserializing)]
     pub recordings: Vec<RecordingEntry>,
 }
 
 /// How an agent's lifts were made, over the episodes that lifted: the learned-grasp
 /// diagnostics of the thumb's opposition and of the grip held through the lift.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct LiftStats {
     /// Episodes that lifted.
     pub lifted: usize,
@@ -370,6 +378,11 @@ pub fn physics_line(r: &AgentResult) -> String {
             .map(|(k, v)| format!("{k} {v}"))
             .collect();
         s.push_str(&format!("; deep contacts with {}", bodies.join(", ")));
+    }
+    if r.objects.iter().all(|o| o.deepest_contacts.is_empty()) {
+        // An evaluation saved before the deepest contacts were recorded.
+        s.push('\n');
+        return s;
     }
     let c = &r.deepest_contact;
     s.push_str(&format!(
@@ -654,6 +667,84 @@ pub enum EvalError {
     /// A recording could not be written.
     #[error(transparent)]
     Record(#[from] record::RecordError),
+    /// The per-object plot could not be drawn or written.
+    #[error("plot {path}: {message}")]
+    Plot {
+        /// The SVG file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// Saved results (`grasp eval --json`) could not be read.
+    #[error("results {path}: {message}")]
+    Results {
+        /// The JSON file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Reads the results of an earlier `grasp eval --json` (one entry per agent, every trial's
+/// outcome) so that they can be printed, compared or plotted again without re-running the
+/// episodes. Each object's counts must agree with its outcomes; the rates and Wilson
+/// intervals (per object and per agent) are recomputed from them, as [`evaluate`] computes
+/// them; agents must list the same objects.
+pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
+    let bad = |message: String| EvalError::Results {
+        path: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+    let mut results: Vec<AgentResult> = serde_json::from_str(&text).map_err(|e| {
+        bad(format!(
+            "not the JSON of `grasp eval --json` (a list of agents' results): {e}"
+        ))
+    })?;
+    if results.is_empty() {
+        return Err(bad("holds no agents".into()));
+    }
+    for r in &mut results {
+        for o in &mut r.objects {
+            let k = o.outcomes.iter().filter(|&&s| s).count();
+            if o.outcomes.len() != o.trials || k != o.successes {
+                return Err(bad(format!(
+                    "agent '{}', object '{}': {} successes in {} trials, but the outcomes \
+                     list {k} in {}",
+                    r.agent,
+                    o.object,
+                    o.successes,
+                    o.trials,
+                    o.outcomes.len()
+                )));
+            }
+            o.rate = k as f64 / o.trials.max(1) as f64;
+            o.ci95 = wilson(k, o.trials);
+        }
+        let k_all: usize = r.objects.iter().map(|o| o.successes).sum();
+        let n_all: usize = r.objects.iter().map(|o| o.trials).sum();
+        r.mean_rate = r.objects.iter().map(|o| o.rate).sum::<f64>() / r.objects.len().max(1) as f64;
+        r.ci95 = wilson(k_all, n_all);
+    }
+    let first: Vec<&str> = results[0]
+        .objects
+        .iter()
+        .map(|o| o.object.as_str())
+        .collect();
+    for r in &results[1..] {
+        if !r
+            .objects
+            .iter()
+            .map(|o| o.object.as_str())
+            .eq(first.iter().copied())
+        {
+            return Err(bad(format!(
+                "agent '{}' lists other objects than '{}'",
+                r.agent, results[0].agent
+            )));
+        }
+    }
+    Ok(results)
 }
 
 /// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
@@ -749,6 +840,20 @@ mod tests {
     }
 
     #[test]
+    fn contact_stats_hand_computed() {
+        // Ten depths (mm): 0, 1, ..., 8 and 25; nearest-rank median is the 5th (4 mm), the
+        // 99th percentile the 10th (25 mm); one over 1 cm.
+        let d: Vec<f64> = (0..9).map(|k| k as f64 * 1e-3).chain([0.025]).collect();
+        let c = ContactStats::of(&d);
+        assert!((c.median - 0.004).abs() < 1e-12, "{c:?}");
+        assert!((c.p99 - 0.025).abs() < 1e-12);
+        assert!((c.max - 0.025).abs() < 1e-12);
+        assert_eq!(c.over_1cm, 1);
+        assert!((c.within_1cm - 0.9).abs() < 1e-12);
+        assert_eq!(ContactStats::of(&[]), ContactStats::default());
+    }
+
+    #[test]
     fn lift_stats_hand_computed() {
         let ep = |lifted, success, thumb, grip| EpisodeSummary {
             object: "box".into(),
@@ -831,5 +936,69 @@ mod tests {
         let csv = csv_table(&[r]);
         assert_eq!(csv.lines().count(), 2);
         assert!(csv.contains("Baseline 1,box,10,8,0.8000"));
+    }
+
+    #[test]
+    fn saved_results_read_back_and_are_checked() {
+        let r = AgentResult {
+            agent: "Baseline 2".into(),
+            objects: vec![ObjectResult {
+                object: "box".into(),
+                trials: 4,
+                successes: 3,
+                rate: 0.75,
+                ci95: wilson(3, 4),
+                mean_steps: 1.0,
+                physics_failures: 1,
+                outcomes: vec![true, false, true, true],
+                deepest_contacts: vec![0.001, 0.03, 0.0, 0.002],
+                failures: vec![TrialFailure {
+                    trial: 1,
+                    report: Some(FailureReport {
+                        failure: PhysicsFailure::DeepPenetration {
+                            depth: 0.03,
+                            with: "lh_ffdistal".into(),
+                            part: Some(2),
+                        },
+                        step: 140,
+                    }),
+                }],
+            }],
+            mean_rate: 0.75,
+            ci95: wilson(3, 4),
+            mean_steps: 1.0,
+            control_steps_per_s: 3.0,
+            physics_failures: 1,
+            failures_by_kind: [("deep_penetration".to_string(), 1)].into(),
+            penetrations_by_body: [("lh_ffdistal".to_string(), 1)].into(),
+            deepest_contact: ContactStats::of(&[0.001, 0.03, 0.0, 0.002]),
+            lifts: LiftStats::default(),
+            wall_s: 1.0,
+            recordings: Vec::new(),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("eval.json");
+        let write = |rs: &[AgentResult]| {
+            std::fs::write(&path, serde_json::to_string_pretty(rs).unwrap()).unwrap();
+        };
+        write(std::slice::from_ref(&r));
+        assert_eq!(read_results(&path).unwrap(), vec![r.clone()]);
+        // Counts that contradict the outcomes.
+        let mut bad = r.clone();
+        bad.objects[0].successes = 4;
+        write(&[bad]);
+        let e = read_results(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("4 successes in 4 trials, but the outcomes list 3 in 4"),
+            "{e}"
+        );
+        // Agents on different objects; no agents.
+        let mut other = r.clone();
+        other.objects[0].object = "can".into();
+        write(&[r, other]);
+        let e = read_results(&path).unwrap_err().to_string();
+        assert!(e.contains("lists other objects"), "{e}");
+        write(&[]);
+        assert!(read_results(&path).is_err());
     }
 }

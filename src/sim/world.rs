@@ -44,7 +44,7 @@ use crate::util::levels::torque_level;
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rapier3d::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 #[path = "record.rs"]
 pub mod record;
@@ -88,7 +88,7 @@ pub enum SimError {
 }
 
 /// Why the physics was declared broken; the episode ends, nothing panics.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum PhysicsFailure {
     /// A position or velocity became NaN or infinite (or rapier quarantined a body).
@@ -158,7 +158,7 @@ impl std::fmt::Display for PhysicsFailure {
 }
 
 /// A physics failure and the physics step (since the reset) at which it was detected.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FailureReport {
     /// What broke (serialised flat: `kind` and its fields).
     #[serde(flatten)]

@@ -141,14 +141,19 @@ pub struct BandCurve {
     pub points: Vec<(f64, f64, f64, f64)>,
 }
 
-/// Colours of the variants, in order (matplotlib's tab10).
-const PALETTE: [RGBColor; 6] = [
+/// Colours of the variants (and of the agents in [`crate::eval::plot`]), in order
+/// (matplotlib's tab10).
+pub const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
 
 /// Renders curves in the style of the paper's Fig. 5 as SVG text: `y_desc` (e.g. the
