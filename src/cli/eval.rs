@@ -110,6 +110,16 @@ fn load_sim(path: Option<&PathBuf>) -> Result<SimConfig> {
     }
 }
 
+/// The simulator config a checkpoint was trained with, read as training reads it (the
+/// default path falls back to the built-in copy outside the repository).
+fn load_trained_sim(path: Option<&PathBuf>) -> Result<SimConfig> {
+    use grasp::train::envs::DEFAULT_SIM_CONFIG_PATH;
+    match path {
+        Some(p) if p.exists() || p != Path::new(DEFAULT_SIM_CONFIG_PATH) => load_sim(Some(p)),
+        _ => Ok(SimConfig::default()),
+    }
+}
+
 /// The simulator config every agent is evaluated in: `--sim-config` (with a warning for
 /// each checkpoint trained with another), else the one the checkpoints were trained with
 /// (refused when they differ: one physics for all agents keeps them comparable; a
@@ -130,7 +140,7 @@ fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> R
     if let Some(p) = flag {
         let cfg = load_sim(Some(p))?;
         for (dir, t) in &trained {
-            if !load_sim(*t).is_ok_and(|c| c == cfg) {
+            if !load_trained_sim(*t).is_ok_and(|c| c == cfg) {
                 warn(format!(
                     "checkpoint {} was trained with simulator config {}; evaluating it with \
                      --sim-config {}",
@@ -144,7 +154,7 @@ fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> R
     }
     let mut chosen: Option<(SimConfig, Option<&PathBuf>, &Path)> = None;
     for (dir, t) in &trained {
-        let cfg = match load_sim(*t) {
+        let cfg = match load_trained_sim(*t) {
             Ok(c) => c,
             Err(e) => {
                 warn(format!(

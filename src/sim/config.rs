@@ -19,7 +19,10 @@ pub enum SimConfigError {
     #[error(transparent)]
     Load(#[from] ConfigError),
     /// A field is out of its allowed range.
-    #[error("sim config: field '{field}' = {value}: {message}")]
+    #[error(
+        "sim config: field '{field}' = {}: {message}",
+        crate::util::num::short(*.value)
+    )]
     Range {
         /// Dotted field name, e.g. `motors.fingers.kp`.
         field: String,
@@ -448,6 +451,15 @@ mod tests {
             let e = c.validate().unwrap_err().to_string();
             assert!(e.contains("object_angular_damping"), "{e}");
         }
+        // A tiny value is printed short, not as 300 digits.
+        let e = SimConfig {
+            dt: 1e-300,
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("= 1e-300: must be in"), "{e}");
         // Values that pass `> 0` but would never finish an episode.
         for (field, c) in [
             (
