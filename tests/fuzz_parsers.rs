@@ -193,6 +193,26 @@ fn train_configs() {
     );
 }
 
+/// The resolved config of the stream recipe spells out every key of every section
+/// (`[env.randomization]`, `[env.stream]`, `[env.curriculum]`, `[env.action]`, `[ppo]`,
+/// `[policy]`), so mutations reach each of them.
+#[test]
+fn resolved_configs_with_every_section() {
+    let cfg = grasp::train::TrainConfig::load(&repo("configs/stream.toml")).unwrap();
+    let seed = cfg.to_toml_string().unwrap();
+    for section in ["[env.randomization]", "[env.stream]", "[env.curriculum]"] {
+        assert!(seed.contains(section), "{section} missing from {seed}");
+    }
+    check(
+        "resolved stream.toml",
+        1500,
+        seed.as_bytes(),
+        usize::MAX,
+        "train.toml",
+        |b| grasp::train::TrainConfig::parse(Path::new("train.toml"), &text(b)),
+    );
+}
+
 #[test]
 fn sim_config() {
     let seed = read("configs/sim.toml");
@@ -366,6 +386,17 @@ fn synergy_models_and_metrics() {
     check("metrics.csv", 2000, &seed, usize::MAX, "metrics.csv", |b| {
         grasp::train::metrics::parse_csv(Path::new("metrics.csv"), &text(b))
     });
+    // The same rows written with today's header (the physics_failures column).
+    let rows = grasp::train::metrics::parse_csv(Path::new("metrics.csv"), &text(&seed)).unwrap();
+    let seed = grasp::train::metrics::to_csv(&rows).into_bytes();
+    check(
+        "metrics.csv (v2)",
+        2000,
+        &seed,
+        usize::MAX,
+        "metrics.csv",
+        |b| grasp::train::metrics::parse_csv(Path::new("metrics.csv"), &text(b)),
+    );
 }
 
 #[test]

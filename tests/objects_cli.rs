@@ -236,7 +236,7 @@ fn the_procedural_stream_lists_exports_and_checks_its_flags() {
                 "procedural",
                 "--count",
                 "5",
-                "--seed",
+                "--stream-seed",
                 seed,
                 "--json",
             ],
@@ -285,10 +285,13 @@ fn the_procedural_stream_lists_exports_and_checks_its_flags() {
         cache.path(),
         &["objects", "list", "--set", "train", "--count", "3"],
     );
-    assert_fails(&o, &["--count applies to --set procedural"]);
+    assert_fails(
+        &o,
+        &["--count and --stream-seed apply to --set procedural only"],
+    );
     let o = grasp(
         cache.path(),
         &["objects", "list", "--set", "procedural", "--count", "0"],
     );
-    assert_fails(&o, &["--count must be at least 1"]);
+    assert_fails(&o, &["--count 0 must be in 1..=10000"]);
 }

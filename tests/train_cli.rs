@@ -217,6 +217,7 @@ fn grasp_env_with_primitives_runs_one_update() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["global_step"], 16);
     let text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    assert!(text.lines().next().unwrap().ends_with(",physics_failures"));
     let rows = parse_csv(Path::new("m"), &text).unwrap();
     assert_eq!(rows.len(), 1);
     let level = rows[0].curriculum_level.expect("curriculum level");
@@ -401,7 +402,9 @@ fn a_run_killed_before_its_first_checkpoint_starts_afresh() {
         let mut args = vec!["train", "--config", s(&cfg), "--out", s(&run)];
         if resume {
             args.push("--resume");
+            // Killed again during its first update.
             std::fs::remove_dir_all(run.join("checkpoints")).unwrap();
+            std::fs::write(run.join("metrics.csv"), format!("{HEADER}\n")).unwrap();
         }
         let out = ok(&grasp(&args));
         assert!(out.contains("completed: 2 updates (2 new)"), "{out}");
@@ -512,4 +515,229 @@ fn ctrl_c_finishes_the_update_writes_a_checkpoint_and_exits_130() {
         more.contains(&format!("{} updates (1 new)", n + 1)),
         "{more}"
     );
+}
+
+/// A cart-pole run of many updates with no periodic checkpoint, started in the
+/// background; returns once it has recorded `updates` updates.
+#[cfg(unix)]
+fn start_long_run(cfg: &Path, run: &Path, updates: usize) -> std::process::Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .args(["train", "--config", s(cfg), "--out", s(run)])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    let ready = || run.join("metrics.csv").is_file() && self::updates(run).len() >= updates;
+    while !ready() {
+        assert!(start.elapsed().as_secs() < 120, "no updates");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child
+}
+
+#[cfg(unix)]
+fn long_config(dir: &Path) -> PathBuf {
+    write(
+        dir,
+        "long.toml",
+        "name = \"cp\"\nseed = 5\ntotal_timesteps = 6400000\nnum_envs = 2\nthreads = 1\n\
+         checkpoint_every = 100000\nplot_every = 100000\nbest_window = 2\n[ppo]\n\
+         num_steps = 32\nnum_minibatches = 2\nupdate_epochs = 2\n[policy]\nkind = \"mlp\"\n\
+         mlp_hidden = 16\n[env]\nkind = \"cartpole\"\ncartpole_max_steps = 50\n",
+    )
+}
+
+/// Sends `signal` to `child` and waits (at most a minute) for it to end.
+#[cfg(unix)]
+fn stop(child: std::process::Child, signal: &str) -> Output {
+    let st = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let mut child = child;
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(
+            start.elapsed().as_secs() < 60,
+            "did not stop after {signal}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[cfg(unix)]
+#[test]
+fn one_process_at_a_time_trains_in_a_run_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = long_config(tmp.path());
+    let run = tmp.path().join("run");
+    let first = start_long_run(&cfg, &run, 1);
+    let other = cartpole_config(tmp.path(), 128);
+    for resume in [false, true] {
+        let mut args = vec!["train", "--config", s(&other), "--out", s(&run)];
+        if resume {
+            args.push("--resume");
+        }
+        let e = grasp(&args);
+        let err = String::from_utf8_lossy(&e.stderr);
+        assert_eq!(e.status.code(), Some(1), "{err}");
+        assert!(err.contains("is in use by another process"), "{err}");
+    }
+    // The second process changed nothing: the config is the first run's.
+    let saved = TrainConfig::load(&run.join("config.toml")).unwrap();
+    assert_eq!(saved.total_timesteps, 6_400_000);
+    let out = stop(first, "-INT");
+    assert_eq!(out.status.code(), Some(130));
+    // The lock went with the process.
+    let more = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        &((updates(&run).len() as u64 + 1) * 64).to_string(),
+    ]));
+    assert!(more.contains("(1 new)"), "{more}");
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_writes_a_checkpoint_as_ctrl_c_does() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = long_config(tmp.path());
+    let run = tmp.path().join("run");
+    let child = start_long_run(&cfg, &run, 2);
+    let out = stop(child, "-TERM");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(130), "{stdout}");
+    assert!(stdout.starts_with("interrupted: "), "{stdout}");
+    assert!(run
+        .join("checkpoints/latest/checkpoint.safetensors")
+        .is_file());
+}
+
+#[test]
+fn a_run_without_its_latest_checkpoint_is_never_deleted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = cartpole_config(tmp.path(), 128);
+    let run = tmp.path().join("run");
+    ok(&grasp(&["train", "--config", s(&cfg), "--out", s(&run)]));
+    std::fs::remove_dir_all(run.join("checkpoints/latest")).unwrap();
+    let snapshot = |dir: &Path| {
+        let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+        let mut stack = vec![dir.to_path_buf()];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else {
+                    files.push((p.display().to_string(), std::fs::read(&p).unwrap()));
+                }
+            }
+        }
+        files.sort();
+        files
+    };
+    let before = snapshot(&run);
+    for resume in [true, false] {
+        let mut args = vec!["train", "--config", s(&cfg), "--out", s(&run)];
+        if resume {
+            args.push("--resume");
+        }
+        let e = grasp(&args);
+        let err = String::from_utf8_lossy(&e.stderr);
+        assert_eq!(e.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("2 metrics rows") && err.contains("nothing was changed"),
+            "{err}"
+        );
+        assert!(
+            err.contains("copy") && err.contains("checkpoints/best"),
+            "{err}"
+        );
+        assert_eq!(snapshot(&run), before);
+    }
+    // Doing what it says continues the run.
+    let best = run.join("checkpoints/best");
+    let latest = run.join("checkpoints/latest");
+    std::fs::create_dir_all(&latest).unwrap();
+    for e in std::fs::read_dir(&best).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), latest.join(e.file_name())).unwrap();
+    }
+    let out = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        "256",
+    ]));
+    assert!(out.contains("completed: 4 updates"), "{out}");
+}
+
+#[test]
+fn resume_refuses_a_changed_environment_unless_asked() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = cartpole_config(tmp.path(), 64);
+    let run = tmp.path().join("run");
+    ok(&grasp(&["train", "--config", s(&cfg), "--out", s(&run)]));
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    let changed = write(
+        tmp.path(),
+        "changed.toml",
+        &(text.replace(
+            "cartpole_max_steps = 50",
+            "cartpole_max_steps = 60\nat_max_steps = \"lift\"",
+        ) + "[env.randomization]\nfriction = [0.6, 0.9]\n"),
+    );
+    let resume = |extra: &[&str]| {
+        let mut args = vec![
+            "train",
+            "--config",
+            s(&changed),
+            "--out",
+            s(&run),
+            "--resume",
+            "--total-timesteps",
+            "128",
+        ];
+        args.extend(extra);
+        grasp(&args)
+    };
+    let e = resume(&[]);
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert_eq!(e.status.code(), Some(1), "{err}");
+    for key in [
+        "env.at_max_steps",
+        "env.cartpole_max_steps",
+        "env.randomization.friction",
+        "--allow-env-change",
+    ] {
+        assert!(err.contains(key), "{key}: {err}");
+    }
+    assert_eq!(updates(&run), vec![1]);
+    let out = ok(&resume(&["--allow-env-change"]));
+    assert!(out.contains("completed: 2 updates (1 new)"), "{out}");
+    // The same environment resumes without the flag.
+    let out = ok(&grasp(&[
+        "train",
+        "--config",
+        s(&changed),
+        "--out",
+        s(&run),
+        "--resume",
+        "--total-timesteps",
+        "192",
+    ]));
+    assert!(out.contains("(1 new)"), "{out}");
 }

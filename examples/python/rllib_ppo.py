@@ -9,6 +9,11 @@ workers share its cores; on a Ray cluster the same script, started on the head n
 `ray.init(address="auto")` (`--address auto`), places the env runners on the cluster's
 nodes: only `--workers` changes. The environment is the config's (`--config`, default the
 built-in configs/base.toml recipe), PPO's hyperparameters are taken from its [ppo] table.
+
+The config is read once, here, and its resolved text (`config_toml`) travels in the env
+config, so no node needs the file (a relative path would be resolved in each worker's
+own directory). `grasp_rl` must be installed on every node of the cluster. Python 3.9
+and 3.10 need `pip install tomli` (3.11+ has tomllib).
 """
 
 from __future__ import annotations
@@ -16,7 +21,11 @@ from __future__ import annotations
 import argparse
 import json
 import time
-import tomllib
+
+try:
+    import tomllib  # Python 3.11+
+except ModuleNotFoundError:  # Python 3.9, 3.10 (pyproject: >= 3.9)
+    import tomli as tomllib
 
 import grasp_rl
 
@@ -24,8 +33,9 @@ import grasp_rl
 def make_env(env_config: dict):
     import grasp_rl  # imported in each worker process
 
+    # The config's text, not its path: the worker may run on another node.
     return grasp_rl.GraspEnv(
-        config=env_config.get("config"),
+        config_toml=env_config["config_toml"],
         objects=env_config.get("objects"),
         difficulty=env_config.get("difficulty"),
     )
@@ -46,14 +56,16 @@ def main() -> None:
     from ray.rllib.algorithms.ppo import PPOConfig
     from ray.tune.registry import register_env
 
-    cfg = tomllib.loads(grasp_rl.GraspEnv(config=a.config, objects="box_sugar").config_toml)
+    # Resolved here (base files merged, checked): the workers get this text.
+    config_toml = grasp_rl.GraspEnv(config=a.config, objects="box_sugar").config_toml
+    cfg = tomllib.loads(config_toml)
     ppo = cfg["ppo"]
     ray.init(address=a.address, include_dashboard=False, log_to_driver=False)
     register_env("grasp_rl", make_env)
     batch = a.workers * a.envs_per_worker * a.rollout
     config = (
         PPOConfig()
-        .environment("grasp_rl", env_config={"config": a.config, "objects": a.objects})
+        .environment("grasp_rl", env_config={"config_toml": config_toml, "objects": a.objects})
         .env_runners(
             num_env_runners=a.workers,
             num_envs_per_env_runner=a.envs_per_worker,

@@ -14,6 +14,12 @@ of the flat Box action (> 0 lifts).
 
 Writes one CSV row per rollout: transitions, episodes, training success rate of the
 episodes that ended in the rollout, mean return and length, curriculum level, wall time.
+
+Runs from any directory: `--config` and `--out` are taken from the directory it is started
+in (the default config is the repository's configs/quick.toml), then it works in the
+repository root, where the paths inside the configs (synergy model, simulator config,
+base files) are rooted, as for `grasp train`. Python 3.9 and 3.10 need
+`pip install tomli` (3.11+ has tomllib).
 """
 
 from __future__ import annotations
@@ -22,21 +28,34 @@ import argparse
 import csv
 import os
 import time
-import tomllib
+from pathlib import Path
+
+try:
+    import tomllib  # Python 3.11+
+except ModuleNotFoundError:  # Python 3.9, 3.10 (pyproject: >= 3.9)
+    import tomli as tomllib
 
 import numpy as np
 
 import grasp_rl
 
+# examples/python/sb3_ppo.py -> the repository root.
+REPO = Path(__file__).resolve().parents[2]
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--config", default="configs/quick.toml")
+    ap.add_argument("--config", default=str(REPO / "configs" / "quick.toml"))
     ap.add_argument("--minutes", type=float, default=10.0, help="wall-clock budget")
     ap.add_argument("--timesteps", type=int, default=None, help="default: the config's")
     ap.add_argument("--seed", type=int, default=None, help="default: the config's")
     ap.add_argument("--out", default="sb3_ppo.csv")
     a = ap.parse_args()
+    # The user's paths from where the script was started; the configs' own paths from
+    # the repository root.
+    a.config = str(Path(a.config).resolve())
+    a.out = str(Path(a.out).resolve())
+    os.chdir(REPO)
 
     import torch
     from stable_baselines3 import PPO

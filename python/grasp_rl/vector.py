@@ -35,9 +35,13 @@ class GraspVectorEnv(VectorEnv):
     has episode seed ``episode_seed(s, i, k)``, as in the Rust ``VecEnv``: results do not
     depend on the thread count. ``reset(seed=s)`` also empties the curriculum windows.
 
-    ``infos``: ``curriculum_level`` (float array), ``physics_failure`` (bool array),
-    ``success`` (bool array, valid where ``infos["_success"]``: the environments whose
-    episode ended), and with ended episodes ``final_obs``, ``final_info`` and ``episode``
+    ``infos`` (arrays with gymnasium's ``_key`` masks): ``curriculum_level`` (float),
+    ``object`` (str: the object of each environment's episode in progress, the next one's
+    where an episode ended), ``physics_failure`` (bool), ``success`` and ``is_success``
+    (bool, valid where ``infos["_success"]``: the environments whose episode ended),
+    ``summary`` (the ended episodes' summary dicts, as :class:`GraspEnv`'s), and with
+    ended episodes ``final_obs``, ``final_info`` (``object``: the ended episode's,
+    ``success``, ``is_success``, ``physics_failure``, ``summary``) and ``episode``
     (``r``: return, ``l``: steps, as gymnasium's RecordEpisodeStatistics).
     """
 
@@ -116,7 +120,14 @@ class GraspVectorEnv(VectorEnv):
         return obs, {
             "curriculum_level": self._levels(),
             "_curriculum_level": np.ones(self.num_envs, bool),
+            "object": self._objects(),
+            "_object": np.ones(self.num_envs, bool),
         }
+
+    def _objects(self) -> np.ndarray:
+        out = np.empty(self.num_envs, dtype=object)
+        out[:] = self._core.episode_objects()
+        return out
 
     def step(
         self, actions: Any
@@ -136,14 +147,20 @@ class GraspVectorEnv(VectorEnv):
         infos: dict[str, Any] = {
             "curriculum_level": self._levels(levels),
             "_curriculum_level": all_envs,
+            "object": self._objects(),
+            "_object": all_envs.copy(),
             "physics_failure": failure,
             "_physics_failure": all_envs.copy(),
             "success": success == 1,
             "_success": success >= 0,
+            "is_success": success == 1,
+            "_is_success": success >= 0,
         }
         if ended:
             done = np.zeros(n, bool)
             final_obs = np.full(n, None, dtype=object)
+            summary = np.full(n, None, dtype=object)
+            ended_object = np.full(n, None, dtype=object)
             ret = np.zeros(n)
             length = np.zeros(n, dtype=np.int64)
             for i, last, rec in ended:
@@ -151,13 +168,24 @@ class GraspVectorEnv(VectorEnv):
                 final_obs[i] = np.frombuffer(last, dtype=np.float32).copy()
                 ret[i] = rec.get("episode_return", 0.0)
                 length[i] = rec.get("steps", 0)
+                summary[i] = rec.get("summary")
+                if summary[i] is not None:
+                    ended_object[i] = summary[i]["object"]
+            infos["summary"] = summary
+            infos["_summary"] = done.copy()
             infos["final_obs"] = final_obs
             infos["_final_obs"] = done
             infos["final_info"] = {
+                "object": ended_object,
+                "_object": done.copy(),
                 "success": success == 1,
                 "_success": done & (success >= 0),
+                "is_success": success == 1,
+                "_is_success": done & (success >= 0),
                 "physics_failure": failure,
                 "_physics_failure": done.copy(),
+                "summary": summary,
+                "_summary": done.copy(),
             }
             infos["_final_info"] = done.copy()
             infos["episode"] = {"r": ret, "l": length, "_r": done.copy(), "_l": done.copy()}

@@ -147,6 +147,7 @@ def test_vector_env_steps_and_is_deterministic_across_threads():
         v = grasp_rl.GraspVectorEnv(num_envs=3, threads=threads, objects=OBJECTS)
         assert v.observation_space.shape == (3, 168) and v.action_space.shape == (3, 8)
         obs, info = v.reset(seed=11)
+        assert info["object"].shape == (3,) and info["_object"].all()
         rng = np.random.default_rng(0)
         seen = [obs]
         rewards = []
@@ -157,12 +158,23 @@ def test_vector_env_steps_and_is_deterministic_across_threads():
             seen.append(obs)
             rewards.append(r)
             assert info["curriculum_level"].shape == (3,)
+            # The keys the README lists, as arrays with `_key` masks.
+            assert set(info["object"]) <= set(OBJECTS.split(","))
+            assert info["_object"].all()
             if term.any():
                 ended += 1
-                assert np.array_equal(info["_final_obs"], term | trunc)
-                assert np.array_equal(info["_success"], term | trunc)
+                done = term | trunc
+                assert np.array_equal(info["_final_obs"], done)
+                assert np.array_equal(info["_success"], done)
+                assert np.array_equal(info["_is_success"], done)
+                assert np.array_equal(info["is_success"], info["success"])
+                assert np.array_equal(info["_summary"], done)
                 for i in np.flatnonzero(term):
                     assert info["final_obs"][i].shape == (168,)
+                    s = info["summary"][i]
+                    assert s["success"] == info["success"][i]
+                    assert s["object"] == info["final_info"]["object"][i]
+                    assert info["final_info"]["summary"][i] is s
         assert ended > 0
         return np.stack(seen), np.stack(rewards)
 

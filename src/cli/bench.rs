@@ -221,7 +221,7 @@ fn ab_configs(
 }
 
 /// Runs `measure` for each config in turn, `rounds` times (A, B, A, B, ...), and returns
-/// each config's measurements.
+/// each config's measurements; an error names the config.
 fn alternate<T>(
     configs: &[(String, SimConfig)],
     rounds: usize,
@@ -229,11 +229,45 @@ fn alternate<T>(
 ) -> Result<Vec<Vec<T>>> {
     let mut out: Vec<Vec<T>> = configs.iter().map(|_| Vec::new()).collect();
     for _ in 0..rounds {
-        for (k, (_, cfg)) in configs.iter().enumerate() {
-            out[k].push(measure(cfg)?);
+        for (k, (name, cfg)) in configs.iter().enumerate() {
+            out[k].push(measure(cfg).with_context(|| format!("measuring with {name}"))?);
         }
     }
     Ok(out)
+}
+
+/// Refuses figures that measure nothing: no finished episode (or step) in the time
+/// given, or only episodes that ended in a physics failure. `(what, count, failures)`.
+fn check_measured(name: &str, seconds: f64, what: &str, count: u64, failures: u64) -> Result<()> {
+    if count == 0 {
+        anyhow::bail!(
+            "{name}: no {what} finished in --seconds {}: there is no throughput to report \
+             (raise --seconds)",
+            grasp::util::num::short(seconds)
+        );
+    }
+    if failures >= count {
+        anyhow::bail!(
+            "{name}: every one of the {count} episodes ended in a physics failure: the \
+             figures would time broken physics (check the simulator config)"
+        );
+    }
+    Ok(())
+}
+
+/// Checks `--seconds`, `--envs` shared by `bench sim` and `bench env`.
+fn check_sizes(envs: usize, seconds: f64) -> Result<()> {
+    let max = bench::MAX_ENVS;
+    if envs == 0 || envs > max {
+        anyhow::bail!("--envs {envs} must be in 1..={max}");
+    }
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3600.0) {
+        anyhow::bail!(
+            "--seconds {} must be in (0, 3600]",
+            grasp::util::num::short(seconds)
+        );
+    }
+    Ok(())
 }
 
 /// The median of one figure over a config's measurements.
@@ -242,6 +276,7 @@ fn med<T>(runs: &[T], f: impl Fn(&T) -> f64) -> f64 {
 }
 
 fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
+    check_sizes(a.envs, a.seconds)?;
     let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
     let threads = super::rollout::threads(a.threads)?;
     let robot = Robot::builtin(Side::Left);
@@ -250,6 +285,12 @@ fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
         let many = bench::run(&robot, cfg, a.envs, threads, a.seconds)?;
         Ok((one, many))
     })?;
+    for ((name, _), r) in configs.iter().zip(&runs) {
+        for f in r.iter().flat_map(|(one, many)| [one, many]) {
+            let envs = format!("{name} ({} envs)", f.envs);
+            check_measured(&envs, a.seconds, "episode", f.episodes, f.physics_failures)?;
+        }
+    }
     let summary = |r: &[(BenchFigures, BenchFigures)], many: bool| {
         let pick = |x: &(BenchFigures, BenchFigures)| if many { x.1.clone() } else { x.0.clone() };
         let figs: Vec<BenchFigures> = r.iter().map(pick).collect();
@@ -257,6 +298,8 @@ fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
             "envs": figs[0].envs,
             "threads": figs[0].threads,
             "physics_steps": figs.iter().map(|f| f.physics_steps).sum::<u64>(),
+            "episodes": figs.iter().map(|f| f.episodes).sum::<u64>(),
+            "physics_failures": figs.iter().map(|f| f.physics_failures).sum::<u64>(),
             "physics_steps_per_s": med(&figs, |f| f.physics_steps_per_s),
             "sim_seconds_per_s": med(&figs, |f| f.sim_seconds_per_s),
             "control_steps_per_s": med(&figs, |f| f.control_steps_per_s),
@@ -319,13 +362,15 @@ fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
             let f = &c[key];
             let num = |k: &str| f[k].as_f64().unwrap_or(f64::NAN);
             println!(
-                "  {:>3} envs on {:>2} threads: {:>9.0} physics steps/s  {:>7.1} simulated s/s  {:>8.1} control steps/s  {:>6.2} episodes/s",
+                "  {:>3} envs on {:>2} threads: {:>9.0} physics steps/s  {:>7.1} simulated s/s  {:>8.1} control steps/s  {:>6.2} episodes/s  ({} of {} episodes ended in a physics failure)",
                 f["envs"],
                 f["threads"],
                 num("physics_steps_per_s"),
                 num("sim_seconds_per_s"),
                 num("control_steps_per_s"),
                 num("episodes_per_s"),
+                f["physics_failures"],
+                f["episodes"],
             );
         }
     }
@@ -346,9 +391,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     use grasp::env::api::{Env, VecEnv};
     use grasp::env::bench::{random_agent, EnvFigures, Until};
     use grasp::env::grasp::{EnvConfig, GraspEnv};
-    if a.envs == 0 || !(a.seconds > 0.0 && a.seconds.is_finite()) {
-        anyhow::bail!("--envs must be at least 1 and --seconds positive");
-    }
+    check_sizes(a.envs, a.seconds)?;
     let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
     let robot = Robot::builtin(Side::Left);
     let model = super::rollout::load_synergy(None, 5)?;
@@ -380,6 +423,14 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
         let mut venv = VecEnv::new(envs, threads, seed)?;
         Ok(random_agent(&mut venv, seed, Until::Seconds(a.seconds))?)
     })?;
+    for ((name, _), r) in configs.iter().zip(&runs) {
+        for f in r {
+            check_measured(name, a.seconds, "environment step", f.env_steps, 0)?;
+            if f.episodes > 0 {
+                check_measured(name, a.seconds, "episode", f.episodes, f.physics_failures)?;
+            }
+        }
+    }
     let per_config: Vec<serde_json::Value> = configs
         .iter()
         .zip(&runs)
@@ -393,6 +444,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
                 "episodes_per_s": med(r, |f| f.episodes_per_s),
                 "env_steps": r.iter().map(|f| f.env_steps).sum::<u64>(),
                 "episodes": r.iter().map(|f| f.episodes).sum::<u64>(),
+                "physics_failures": r.iter().map(|f| f.physics_failures).sum::<u64>(),
                 "wall_s": r.iter().map(|f| f.wall_s).sum::<f64>(),
                 "runs": r,
             })
@@ -419,7 +471,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     for c in &per_config {
         let num = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
         println!(
-            "{}: grasp env, random agent, {} envs on {threads} threads, objects {}: {:.1} env steps/s, {:.2} episodes/s (median of {} rounds; {} steps, {} episodes in {:.1} s; reset and stage 1 included)",
+            "{}: grasp env, random agent, {} envs on {threads} threads, objects {}: {:.1} env steps/s, {:.2} episodes/s (median of {} rounds; {} steps, {} episodes ({} ended in a physics failure) in {:.1} s; reset and stage 1 included)",
             c["config"].as_str().unwrap_or("?"),
             a.envs,
             a.objects,
@@ -428,6 +480,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
             a.rounds,
             c["env_steps"],
             c["episodes"],
+            c["physics_failures"],
             num("wall_s"),
         );
     }

@@ -15,7 +15,7 @@ use grasp::eval::{
 use grasp::robot::{Robot, Side};
 use grasp::sim::SimConfig;
 use grasp::util::fsx::write_atomic;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::rollout::{load_synergy, sim_objects, threads};
 use super::Global;
@@ -78,7 +78,11 @@ pub struct EvalArgs {
     /// Curriculum success rate r_s that sets the start-pose randomisation (eq. 6).
     #[arg(long, default_value_t = 1.0)]
     pub difficulty: f64,
-    /// Simulator config (TOML); built-in defaults when absent.
+    /// Simulator config (TOML). When absent: the one the checkpoints were trained with
+    /// (their config.toml's sim_config, a path from the current directory; refused when
+    /// they differ; the built-in one, with a warning, when the file cannot be read), else
+    /// the built-in defaults. Given, it applies to every agent, with a warning for each
+    /// checkpoint trained with another.
     #[arg(long)]
     pub sim_config: Option<PathBuf>,
     /// Worker threads (default: available cores).
@@ -111,6 +115,102 @@ struct AgentEnv {
     spec: AgentSpec,
     env: EnvConfig,
     model: grasp::synergy::SynergyModel,
+    /// The simulator config the checkpoint was trained with (`None` for baselines and
+    /// checkpoints without a config.toml); `Some(None)`: the built-in one.
+    trained_sim: Option<Option<PathBuf>>,
+}
+
+/// Loads a simulator config file, or the built-in one.
+fn load_sim(path: Option<&PathBuf>) -> Result<SimConfig> {
+    match path {
+        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display())),
+        None => Ok(SimConfig::default()),
+    }
+}
+
+/// The simulator config a checkpoint was trained with, read as training reads it (the
+/// default path falls back to the built-in copy outside the repository).
+fn load_trained_sim(path: Option<&PathBuf>) -> Result<SimConfig> {
+    use grasp::train::envs::DEFAULT_SIM_CONFIG_PATH;
+    match path {
+        Some(p) if p.exists() || p != Path::new(DEFAULT_SIM_CONFIG_PATH) => load_sim(Some(p)),
+        _ => Ok(SimConfig::default()),
+    }
+}
+
+/// The simulator config every agent is evaluated in: `--sim-config` (with a warning for
+/// each checkpoint trained with another), else the one the checkpoints were trained with
+/// (refused when they differ: one physics for all agents keeps them comparable; a
+/// warning and the built-in one when its file cannot be read here), else the built-in
+/// one.
+fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> Result<SimConfig> {
+    let label =
+        |p: Option<&PathBuf>| p.map_or("the built-in one".to_string(), |p| p.display().to_string());
+    let warn = |m: String| {
+        if !g.quiet {
+            eprintln!("warning: {m}");
+        }
+    };
+    let trained: Vec<(&Path, Option<&PathBuf>)> = agents
+        .iter()
+        .filter_map(|ag| Some((ag.spec.checkpoint()?, ag.trained_sim.as_ref()?.as_ref())))
+        .collect();
+    if let Some(p) = flag {
+        let cfg = load_sim(Some(p))?;
+        for (dir, t) in &trained {
+            if !load_trained_sim(*t).is_ok_and(|c| c == cfg) {
+                warn(format!(
+                    "checkpoint {} was trained with simulator config {}; evaluating it with \
+                     --sim-config {}",
+                    dir.display(),
+                    label(*t),
+                    p.display()
+                ));
+            }
+        }
+        return Ok(cfg);
+    }
+    let mut chosen: Option<(SimConfig, Option<&PathBuf>, &Path)> = None;
+    for (dir, t) in &trained {
+        let cfg = match load_trained_sim(*t) {
+            Ok(c) => c,
+            Err(e) => {
+                warn(format!(
+                    "checkpoint {} was trained with simulator config {}, which cannot be \
+                     read here ({e:#}): evaluating with the built-in one (pass --sim-config \
+                     to choose)",
+                    dir.display(),
+                    label(*t)
+                ));
+                SimConfig::default()
+            }
+        };
+        match &chosen {
+            None => chosen = Some((cfg, *t, dir)),
+            Some((c, first, first_dir)) if *c != cfg => bail!(
+                "checkpoints {} and {} were trained with different simulator configs ({} and \
+                 {}): pass --sim-config to evaluate them in one",
+                first_dir.display(),
+                dir.display(),
+                label(*first),
+                label(*t)
+            ),
+            Some(_) => {}
+        }
+    }
+    Ok(match chosen {
+        Some((cfg, t, dir)) => {
+            if cfg != SimConfig::default() && !g.quiet {
+                eprintln!(
+                    "simulator config: {}, as checkpoint {} was trained with",
+                    label(t),
+                    dir.display()
+                );
+            }
+            cfg
+        }
+        None => SimConfig::default(),
+    })
 }
 
 /// Resolves each agent's environment: checkpoints from their own config.toml, baselines
@@ -136,6 +236,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
                     spec,
                     env: flag_env.clone(),
                     model: flag_model()?,
+                    trained_sim: None,
                 });
             };
             let setup = checkpoint_setup(dir)
@@ -151,6 +252,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
                     spec,
                     env: flag_env.clone(),
                     model: flag_model()?,
+                    trained_sim: None,
                 });
             };
             setup.check_flags(dir, a.modality, a.components)?;
@@ -172,6 +274,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
                 },
                 spec,
                 model,
+                trained_sim: Some(setup.sim_config),
             })
         })
         .collect()
@@ -272,13 +375,10 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         .map(|s| agent_spec(s, a.stochastic))
         .collect::<Result<Vec<_>>>()?;
     let robot = Robot::builtin(Side::Left);
-    let sim_cfg = match &a.sim_config {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
-        None => SimConfig::default(),
-    };
     let objects = sim_objects(&a.objects)?;
     let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
     let agents = agent_envs(a, specs, g)?;
+    let sim_cfg = eval_sim_config(a.sim_config.as_ref(), &agents, g)?;
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
         every: a.rec.record_every,

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 #[command(after_help = "Examples:
   grasp objects list --set train
   grasp objects list --set ./my_meshes --json
-  grasp objects list --set procedural --count 20 --seed 3
+  grasp objects list --set procedural --count 20 --stream-seed 3
   grasp objects export proc-3-17 --out proc-3-17.obj
   grasp objects show bottle_tall
   grasp objects show mug --set objects.toml
@@ -35,10 +35,15 @@ enum ObjectsCmd {
         /// train | unseen | all | procedural | DIR | manifest.toml | mesh.obj | name,name,...
         #[arg(long = "set", visible_alias = "objects", default_value = "all")]
         set: String,
-        /// With `--set procedural`: how many stream objects to list (the stream seed is
-        /// `--seed`, default 0).
+        /// With `--set procedural`: how many stream objects to list (1..=10000; default
+        /// 64, the objects `--objects procedural` means everywhere).
         #[arg(long)]
         count: Option<usize>,
+        /// With `--set procedural`: the stream seed to list (default 0, the seed of
+        /// `--objects procedural` everywhere; the global --seed seeds episodes, never
+        /// objects).
+        #[arg(long)]
+        stream_seed: Option<u64>,
     },
     /// Show one object: size, bounding box, mass, volume, friction, inertia, hulls.
     Show {
@@ -48,11 +53,11 @@ enum ObjectsCmd {
         #[arg(long = "set", visible_alias = "objects", default_value = "all")]
         set: String,
     },
-    /// Write an object's visual mesh (object frame, metres) as OBJ.
+    /// Write an object's visual mesh (object frame, metres) as OBJ or binary STL.
     Export {
         /// Object name (or a path to a mesh file).
         name: String,
-        /// Output .obj file; `-` writes the OBJ text to stdout.
+        /// Output .obj or .stl file (by its extension); `-` writes the OBJ text to stdout.
         #[arg(long)]
         out: PathBuf,
         /// Set to look the name up in.
@@ -69,9 +74,13 @@ pub fn load_objects(arg: &str) -> anyhow::Result<Vec<Object>> {
 }
 
 /// Finds object `name` in set `set`; a `name` that is an existing mesh file stands alone.
+/// A stream object (`proc-<seed>-<index>`) is found in the sets `all` (the default) and
+/// `procedural` (the endless stream); another set must hold it.
 fn find_spec(name: &str, set: &str) -> anyhow::Result<ResolvedSpec> {
     if let Some((seed, index)) = stream::parse_name(name) {
-        return Ok(stream::stream_spec(seed, index));
+        if set == "all" || set == stream::STREAM_SET {
+            return Ok(stream::stream_spec(seed, index));
+        }
     }
     let specs = sets::resolve_specs(set).with_context(|| format!("cannot resolve set `{set}`"))?;
     if let Some(s) = specs.iter().find(|s| s.spec.name == name) {
@@ -101,6 +110,9 @@ fn find_spec(name: &str, set: &str) -> anyhow::Result<ResolvedSpec> {
     bail!(msg)
 }
 
+/// Most stream objects `objects list --count` builds.
+const MAX_COUNT: usize = 10_000;
+
 #[derive(serde::Serialize)]
 struct Summary<'a> {
     name: &'a str,
@@ -118,18 +130,32 @@ fn cm(v: [f64; 3]) -> [f64; 3] {
 /// Runs `grasp objects`.
 pub fn run(args: ObjectsArgs, global: &Global) -> anyhow::Result<()> {
     match args.cmd {
-        ObjectsCmd::List { set, count } => {
+        ObjectsCmd::List {
+            set,
+            count,
+            stream_seed,
+        } => {
             let objects = if set == stream::STREAM_SET {
-                let seed = global.seed.unwrap_or(0);
+                if global.seed.is_some() {
+                    bail!(
+                        "--seed seeds episodes, not objects: `procedural` is stream seed 0 \
+                         everywhere (as in `eval --objects procedural`); list another stream \
+                         seed with --stream-seed S"
+                    );
+                }
+                let seed = stream_seed.unwrap_or(0);
                 let n = count.unwrap_or(stream::DEFAULT_COUNT);
-                if n == 0 {
-                    bail!("--count must be at least 1");
+                if n == 0 || n > MAX_COUNT {
+                    bail!(
+                        "--count {n} must be in 1..={MAX_COUNT} (each object is built to be \
+                         listed; `grasp objects show proc-<seed>-<index>` shows any one)"
+                    );
                 }
                 sets::build_all(&stream::stream_specs(seed, n), &BuildContext::from_env())
                     .with_context(|| format!("cannot build the procedural stream (seed {seed})"))?
             } else {
-                if count.is_some() {
-                    bail!("--count applies to --set procedural only");
+                if count.is_some() || stream_seed.is_some() {
+                    bail!("--count and --stream-seed apply to --set procedural only");
                 }
                 load_objects(&set)?
             };
@@ -194,9 +220,19 @@ pub fn run(args: ObjectsArgs, global: &Global) -> anyhow::Result<()> {
                     .context("writing the OBJ to stdout")?;
                 return Ok(());
             }
-            prepared
-                .mesh
-                .write_obj(&out, &comment)
+            let ext = out
+                .extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase());
+            let written = match ext.as_deref() {
+                Some("obj") => prepared.mesh.write_obj(&out, &comment),
+                Some("stl") => prepared.mesh.write_stl(&out),
+                _ => bail!(
+                    "cannot export to {}: the file must end in .obj or .stl (or be `-` for \
+                     OBJ on stdout)",
+                    out.display()
+                ),
+            };
+            written
                 .map_err(|e: ObjectError| anyhow::anyhow!(e))
                 .with_context(|| format!("cannot export to {}", out.display()))?;
             if global.json {

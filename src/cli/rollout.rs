@@ -65,11 +65,14 @@ pub fn load_synergy(path: Option<&PathBuf>, n: usize) -> Result<SynergyModel> {
 /// Resolves `--objects` into the simulator's object descriptions.
 pub fn sim_objects(arg: &str) -> Result<Vec<(String, ObjectSpec)>> {
     let objects = super::objects::load_objects(arg)?;
+    // Every object is checked before any episode runs, naming the set (the manifest, the
+    // folder) and the object.
     objects
         .iter()
         .map(|o| {
-            let spec = ObjectSpec::from_object(o)
-                .with_context(|| format!("object '{}' cannot be simulated", o.name))?;
+            let spec = ObjectSpec::simulable(o)
+                .map_err(|e| anyhow::anyhow!(e))
+                .with_context(|| format!("objects `{arg}`"))?;
             Ok((o.name.clone(), spec))
         })
         .collect()

@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use grasp::train::{StopReason, TrainConfig, TrainSession};
+use grasp::train::{OpenOptions, StopReason, TrainConfig, TrainSession};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -17,9 +17,12 @@ use super::Global;
 /// learning_curve.svg. Every file is replaced atomically: after a crash or kill -9,
 /// `--resume` continues from checkpoints/latest, dropping the metrics rows recorded after
 /// it. With checkpoint_every = 1 (the default) at most one update is lost. Ctrl-C (SIGINT)
-/// finishes the update in progress, writes checkpoints/latest and exits with status 130;
-/// a second Ctrl-C exits at once. A folder without a checkpoint (a run killed before its
-/// first one) starts afresh.
+/// or SIGTERM (a scheduler's or `timeout`'s stop) finishes the update in progress, writes
+/// checkpoints/latest and exits with status 130; a second one exits at once. One process
+/// at a time trains in a folder (a second is refused while the first holds its lock).
+/// A folder whose run stopped during its first update starts afresh; nothing recorded
+/// is ever deleted: a folder with metrics rows but no checkpoints/latest is refused with
+/// what to do, and `--resume` refuses a changed [env] unless --allow-env-change.
 #[derive(Debug, Args)]
 #[command(
     after_help = "Examples:\n  grasp train --config configs/cartpole.toml\n  grasp train --config configs/quick.toml --out runs/quick1 --seed 3\n  grasp train --config configs/gru_m3_pca5.toml --time-budget-minutes 60\n  grasp train --config configs/gru_m3_pca5.toml --resume\n  grasp train --config configs/stream.toml --objects procedural\n  grasp train --config configs/base.toml --total-timesteps 20000 --num-envs 4 --json\n\nThe global --seed overrides the config's seed."
@@ -34,6 +37,10 @@ pub struct TrainArgs {
     /// Continue the run in the folder from its latest checkpoint.
     #[arg(long)]
     pub resume: bool,
+    /// With --resume: continue even though the config's [env] table differs from the one
+    /// the checkpoint was trained under (otherwise refused, naming the keys).
+    #[arg(long, requires = "resume")]
+    pub allow_env_change: bool,
     /// Override the config's planned number of transitions.
     #[arg(long)]
     pub total_timesteps: Option<u64>,
@@ -74,7 +81,11 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(&cfg.name));
-    let mut session = TrainSession::open(cfg, &dir, a.resume)
+    let opts = OpenOptions {
+        resume: a.resume,
+        allow_env_change: a.allow_env_change,
+    };
+    let mut session = TrainSession::open_with(cfg, &dir, opts)
         .with_context(|| format!("preparing run folder {}", dir.display()))?;
     let target = if g.quiet || g.json {
         ProgressDrawTarget::hidden()
@@ -99,12 +110,12 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
             }
             if !quiet {
                 eprintln!(
-                    "\ninterrupted: finishing the update in progress, then writing a \
-                     checkpoint (Ctrl-C again to quit at once)"
+                    "\ninterrupted (SIGINT or SIGTERM): finishing the update in progress, \
+                     then writing a checkpoint (Ctrl-C again to quit at once)"
                 );
             }
         })
-        .context("installing the Ctrl-C handler")?;
+        .context("installing the Ctrl-C and SIGTERM handler")?;
     }
     session.set_stop_flag(Arc::clone(&stop));
     let start_step = session.trainer().global_step();

@@ -68,6 +68,12 @@ pub trait Env: Send {
     fn reset(&mut self, seed: u64) -> Vec<f32>;
     /// Applies `a` and advances the episode by one control step.
     fn step(&mut self, a: &Action) -> Step;
+    /// The environment as [`std::any::Any`], for a caller that reads what its concrete
+    /// type offers (the Python vector env reads a grasping environment's object and
+    /// episode summary); `None` unless the type opts in.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
 }
 
 /// Errors of [`VecEnv`].
@@ -256,6 +262,12 @@ impl VecEnv {
     /// Number of environments.
     pub fn num_envs(&self) -> usize {
         self.slots.len()
+    }
+
+    /// Environment `i` (as it stands after the last step: an environment whose episode
+    /// ended has already started the next one).
+    pub fn env(&self, i: usize) -> Option<&dyn Env> {
+        self.slots.get(i).map(|s| s.env.as_ref())
     }
 
     /// Length of one observation.

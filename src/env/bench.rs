@@ -20,6 +20,8 @@ pub struct EnvFigures {
     pub env_steps: u64,
     /// Episodes finished.
     pub episodes: u64,
+    /// Episodes that ended in a detected physics failure.
+    pub physics_failures: u64,
     /// Wall-clock seconds.
     pub wall_s: f64,
     /// Environment steps per wall second.
@@ -44,7 +46,7 @@ pub fn random_agent(venv: &mut VecEnv, seed: u64, until: Until) -> Result<EnvFig
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let start = Instant::now();
     venv.reset(seed)?;
-    let (mut env_steps, mut episodes) = (0u64, 0u64);
+    let (mut env_steps, mut episodes, mut physics_failures) = (0u64, 0u64, 0u64);
     let more = |steps: u64| match until {
         Until::Seconds(s) => start.elapsed().as_secs_f64() < s,
         Until::Steps(n) => steps < n.max(1),
@@ -64,12 +66,14 @@ pub fn random_agent(venv: &mut VecEnv, seed: u64, until: Until) -> Result<EnvFig
             .zip(&s.truncated)
             .filter(|(t, u)| **t || **u)
             .count() as u64;
+        physics_failures += s.infos.iter().filter(|i| i.physics_failure).count() as u64;
     }
     let wall_s = start.elapsed().as_secs_f64().max(1e-9);
     Ok(EnvFigures {
         envs,
         env_steps,
         episodes,
+        physics_failures,
         wall_s,
         env_steps_per_s: env_steps as f64 / wall_s,
         episodes_per_s: episodes as f64 / wall_s,

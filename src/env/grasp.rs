@@ -154,10 +154,11 @@ impl EnvConfig {
                 format!("{} is outside (0, 10] s", self.closing_time),
             );
         }
-        if !(self.closing_period > 0.0 && self.closing_period <= self.closing_time) {
+        // At least 1 ms: a tiny period passes `> 0` but never finishes stage 1.
+        if !(self.closing_period >= 1e-3 && self.closing_period <= self.closing_time) {
             return bad(
                 "closing_period",
-                format!("{} must be in (0, closing_time]", self.closing_period),
+                format!("{} must be in [0.001 s, closing_time]", self.closing_period),
             );
         }
         if !(self.action.eps_scale > 0.0 && self.action.eps_scale <= 5.0) {
@@ -606,6 +607,10 @@ impl GraspEnv {
 impl Env for GraspEnv {
     fn obs_dim(&self) -> usize {
         self.layout.len()
+    }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
     }
 
     fn action_spec(&self) -> ActionSpec {

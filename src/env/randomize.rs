@@ -24,12 +24,15 @@ pub struct Randomization {
     /// Whether episodes are randomised at all.
     pub enabled: bool,
     /// Factor on the object's mass, drawn log-uniformly in `[lo, hi]`.
+    #[serde(deserialize_with = "mass_scale")]
     pub mass_scale: [f64; 2],
     /// Largest mass after scaling (kg).
     pub max_mass_kg: f64,
     /// The object's friction coefficient, drawn uniformly (replaces the object's own).
+    #[serde(deserialize_with = "friction")]
     pub friction: [f64; 2],
     /// Uniform factor on the object's size, drawn uniformly.
+    #[serde(deserialize_with = "size_scale")]
     pub size_scale: [f64; 2],
     /// Largest |yaw| added to the object's start pose (rad; pi = any heading).
     pub yaw: f64,
@@ -53,6 +56,30 @@ impl Default for Randomization {
             joint_noise: 0.001,
         }
     }
+}
+
+/// A `[lo, hi]` range: exactly two numbers (serde's fixed-size arrays would drop extra
+/// elements without a word).
+fn pair<'de, D: serde::Deserializer<'de>>(d: D, field: &str) -> Result<[f64; 2], D::Error> {
+    let v = Vec::<f64>::deserialize(d)?;
+    <[f64; 2]>::try_from(v.as_slice()).map_err(|_| {
+        serde::de::Error::custom(format!(
+            "`{field}` has {} numbers: a range is exactly 2, [lo, hi]",
+            v.len()
+        ))
+    })
+}
+
+fn mass_scale<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    pair(d, "randomization.mass_scale")
+}
+
+fn friction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    pair(d, "randomization.friction")
+}
+
+fn size_scale<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    pair(d, "randomization.size_scale")
 }
 
 /// A standard normal draw, as the sim backend's raw-sensor model draws its noise.

@@ -324,7 +324,12 @@ impl LiftStats {
                 .filter(|e| f(e))
                 .map(|e| e.grip_effort)
                 .collect();
-            xs.iter().sum::<f64>() / xs.len().max(1) as f64
+            // An empty f64 sum is -0.0, which would print as "-0.00".
+            if xs.is_empty() {
+                0.0
+            } else {
+                xs.iter().sum::<f64>() / xs.len() as f64
+            }
         };
         LiftStats {
             lifted: lifted.len(),
@@ -555,6 +560,8 @@ pub struct CheckpointSetup {
     pub n_components: usize,
     /// The synergy model saved beside the checkpoint (`synergy.json`), when present.
     pub synergy: Option<PathBuf>,
+    /// The simulator config file the run was trained with (`None`: the built-in one).
+    pub sim_config: Option<PathBuf>,
 }
 
 impl CheckpointSetup {
@@ -641,6 +648,7 @@ pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError
         env,
         n_components: cfg.n_components,
         synergy: synergy.is_file().then_some(synergy),
+        sim_config: cfg.sim_config,
     }))
 }
 

@@ -137,6 +137,7 @@ mod tests {
             curriculum_level: None,
             transitions_per_s: 1.0,
             wall_s: 1.0,
+            physics_failures: 0,
         }
     }
 

@@ -520,6 +520,51 @@ impl TriMesh {
         write_atomic(path, self.to_obj_string(comment).as_bytes()).map_err(ObjectError::Write)
     }
 
+    /// The mesh as binary STL (metres, one facet per triangle with its unit normal).
+    pub fn to_stl_bytes(&self) -> Vec<u8> {
+        let v = |i: u32| {
+            let p = self.vertices[i as usize];
+            [p[0] as f32, p[1] as f32, p[2] as f32]
+        };
+        let tris: Vec<stl_io::Triangle> = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
+                let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                let n = [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ];
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                let n = if len > 0.0 {
+                    n.map(|x| x / len)
+                } else {
+                    [0.0; 3]
+                };
+                stl_io::Triangle {
+                    normal: stl_io::Normal::new(n),
+                    vertices: [
+                        stl_io::Vertex::new(a),
+                        stl_io::Vertex::new(b),
+                        stl_io::Vertex::new(c),
+                    ],
+                }
+            })
+            .collect();
+        let mut bytes = Vec::with_capacity(84 + 50 * tris.len());
+        // Writing into memory cannot fail.
+        let _ = stl_io::write_stl(&mut bytes, tris.iter());
+        bytes
+    }
+
+    /// Writes the mesh as binary STL to `path`, atomically.
+    pub fn write_stl(&self, path: &Path) -> Result<(), ObjectError> {
+        write_atomic(path, &self.to_stl_bytes()).map_err(ObjectError::Write)
+    }
+
     /// A stable 128-bit digest of the mesh content (vertex bits and indices), see
     /// [`super::decomp::Fnv128`].
     pub fn content_hash(&self) -> u128 {

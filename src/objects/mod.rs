@@ -176,6 +176,16 @@ pub enum ObjectError {
         /// What is wrong.
         message: String,
     },
+    /// A comma-separated name list holds the name of a whole set.
+    #[error(
+        "`{name}` is an object set, not an object name: a comma-separated list holds \
+         object names only (stream objects as proc-<seed>-<index>); pass --objects {name} \
+         alone"
+    )]
+    SetInList {
+        /// The set named.
+        name: String,
+    },
     /// The `--objects` argument names nothing known.
     #[error("unknown object or set `{name}`: {hint}")]
     Unknown {

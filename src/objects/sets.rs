@@ -272,6 +272,27 @@ pub fn prepare(rs: &ResolvedSpec) -> Result<Prepared, ObjectError> {
     if !(mass.is_finite() && mass > 0.0) {
         return Err(invalid(format!("mass {mass} kg is not positive")));
     }
+    // A density gives the mass only with the volume: held to the bound of `mass_kg`.
+    let (lo, hi) = super::spec::MASS_RANGE_KG;
+    if let MassSpec::Density(d) = spec.mass_spec() {
+        if !rs.builtin && !(lo..=hi).contains(&mass) {
+            return Err(ObjectError::InvalidSpec {
+                source_name: rs.source.clone(),
+                object: spec.name.clone(),
+                field: "density_kg_m3".into(),
+                message: format!(
+                    "{d} kg/m^3 over {:.3e} m^3 gives {} kg, outside the {lo}..={hi} kg \
+                     that mass_kg allows",
+                    props.volume,
+                    if mass >= 0.01 {
+                        format!("{mass:.1}")
+                    } else {
+                        format!("{mass:.2e}")
+                    }
+                ),
+            });
+        }
+    }
     Ok(Prepared {
         spec: rs.clone(),
         inertia: props.inertia_for_mass(mass),
@@ -1007,6 +1028,11 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
     let all = builtin_set("all").unwrap_or_default();
     let mut out = Vec::new();
     for name in arg.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        if BUILTIN_SETS.contains(&name) || name == super::stream::STREAM_SET {
+            return Err(ObjectError::SetInList {
+                name: name.to_string(),
+            });
+        }
         if let Some((seed, index)) = super::stream::parse_name(name) {
             out.push(super::stream::stream_spec(seed, index));
             continue;

@@ -34,6 +34,12 @@ use super::ObjectError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// The mass a user object may have (kg), given as `mass_kg` or as density times volume.
+pub const MASS_RANGE_KG: (f64, f64) = (0.001, 10.0);
+
+/// The thinnest side of a primitive shape (m): the simulator refuses thinner ones.
+pub const MIN_SIDE_M: f64 = 0.001;
+
 /// Density used when a spec gives neither mass nor density (kg/m^3).
 pub const DEFAULT_DENSITY: f64 = 500.0;
 /// Friction used when a spec gives none.
@@ -253,7 +259,9 @@ impl ObjectSpec {
                     "give either mass_kg or density_kg_m3, not both".into(),
                 ))
             }
-            (Some(m), None) if !(m.is_finite() && (0.001..=10.0).contains(&m)) => {
+            (Some(m), None)
+                if !(m.is_finite() && (MASS_RANGE_KG.0..=MASS_RANGE_KG.1).contains(&m)) =>
+            {
                 return Err(err("mass_kg", format!("{m} is outside 0.001..=10 kg")))
             }
             (None, Some(d)) if !(d.is_finite() && (1.0..=20000.0).contains(&d)) => {
@@ -264,11 +272,15 @@ impl ObjectSpec {
             }
             _ => {}
         }
+        // At least 1 mm: the simulator refuses thinner sides (half sizes below 0.5 mm).
         let dim = |field: &str, v: f64| -> Result<(), ObjectError> {
-            if v.is_finite() && v > 0.0 && v <= super::mesh::MAX_EXTENT_M {
+            if (MIN_SIDE_M..=super::mesh::MAX_EXTENT_M).contains(&v) {
                 Ok(())
             } else {
-                Err(err(field, format!("{v} must be positive and at most 1 m")))
+                Err(err(
+                    field,
+                    format!("{} must be in [0.001, 1] m", crate::util::num::short(v)),
+                ))
             }
         };
         match &self.shape {

@@ -7,6 +7,7 @@ use super::actions::{decode, f32_bytes};
 use super::config::{resolve, Overrides, Source};
 use super::error::{config_error, env_error, locked, no_panic};
 use crate::env::api::VecEnv;
+use crate::env::grasp::{EpisodeSummary, GraspEnv};
 use crate::train::envs::{build_envs, CurriculumLevels, TrainEnvs};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -49,6 +50,19 @@ type StepOut<'py> = (
     Bound<'py, PyBytes>,
     Bound<'py, PyList>,
 );
+
+/// Environment `i` of `venv` as a grasping environment (every environment of a
+/// `CoreVecEnv` is one).
+fn grasp_env(venv: &VecEnv, i: usize) -> Option<&GraspEnv> {
+    venv.env(i)?.as_any()?.downcast_ref::<GraspEnv>()
+}
+
+/// The object of each environment's episode in progress.
+fn objects_of(venv: &VecEnv) -> Vec<String> {
+    (0..venv.num_envs())
+        .map(|i| grasp_env(venv, i).map_or_else(String::new, |g| g.episode_object().to_string()))
+        .collect()
+}
 
 impl CoreVecEnv {
     fn levels_bytes(&self) -> Vec<u8> {
@@ -128,17 +142,30 @@ impl CoreVecEnv {
     /// next episode's first for environments that ended), rewards (float32), terminated,
     /// truncated (uint8), success (int8: -1 none, 0, 1), physics failure (uint8),
     /// curriculum levels (float64), and a list of (index, final observation bytes,
-    /// episode summary dict) for the environments whose episode ended.
+    /// dict of episode_return, steps and summary) for the environments whose episode
+    /// ended.
     fn step<'py>(
         &self,
         py: Python<'py>,
         actions: &[u8],
     ) -> PyResult<(StepOut<'py>, Bound<'py, PyBytes>)> {
         let actions = decode(actions, self.num_envs, self.continuous)?;
-        let (s, records) = locked(py, &self.venv, "vector environment", "step", |venv| {
-            let s = venv.step(&actions).map_err(env_error)?;
-            Ok((s, venv.drain_finished()))
-        })?;
+        let (s, records, summaries) =
+            locked(py, &self.venv, "vector environment", "step", |venv| {
+                let s = venv.step(&actions).map_err(env_error)?;
+                // The summaries of the episodes that ended (each environment has already
+                // started its next episode; its last summary is the ended one's).
+                let summaries: Vec<Option<EpisodeSummary>> = s
+                    .final_obs
+                    .iter()
+                    .enumerate()
+                    .map(|(i, last)| {
+                        last.as_ref()
+                            .and_then(|_| grasp_env(venv, i)?.last_episode().cloned())
+                    })
+                    .collect();
+                Ok((s, venv.drain_finished(), summaries))
+            })?;
         let ended = PyList::empty(py);
         for (i, last) in s.final_obs.iter().enumerate() {
             if let Some(last) = last {
@@ -147,6 +174,9 @@ impl CoreVecEnv {
                 if let Some(r) = rec {
                     d.set_item("episode_return", r.ret)?;
                     d.set_item("steps", r.length)?;
+                }
+                if let Some(summary) = &summaries[i] {
+                    d.set_item("summary", super::env::summary_dict(py, summary)?)?;
                 }
                 ended.append((i, PyBytes::new(py, &f32_bytes(last)), d))?;
             }
@@ -177,6 +207,18 @@ impl CoreVecEnv {
             ),
             PyBytes::new(py, &self.levels_bytes()),
         ))
+    }
+
+    /// The object of each environment's episode in progress (after a step: the next
+    /// episode's for the environments whose episode ended).
+    fn episode_objects(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        locked(
+            py,
+            &self.venv,
+            "vector environment",
+            "episode_objects",
+            |venv| Ok(objects_of(venv)),
+        )
     }
 
     /// The curriculum levels (float64 bytes, one per environment).

@@ -29,6 +29,9 @@ pub enum BenchError {
     Settings(String),
 }
 
+/// Most environments one benchmark steps (`grasp bench sim` and `bench env`).
+pub const MAX_ENVS: usize = 1024;
+
 /// Throughput figures of one configuration.
 #[derive(Debug, Clone, Serialize)]
 pub struct BenchFigures {
@@ -38,6 +41,8 @@ pub struct BenchFigures {
     pub threads: usize,
     /// Episodes completed (reset, close, hold, lift, judge).
     pub episodes: u64,
+    /// Episodes that ended in a detected physics failure.
+    pub physics_failures: u64,
     /// Physics steps over all envs.
     pub physics_steps: u64,
     /// Control steps over all envs (simulated time / control period).
@@ -57,6 +62,7 @@ pub struct BenchFigures {
 #[derive(Default, Clone, Copy)]
 struct Tally {
     episodes: u64,
+    failures: u64,
     steps: u64,
     sim: f64,
 }
@@ -73,6 +79,7 @@ fn run_env(sim: &mut HandSim, seed: u64, deadline: Instant) -> Tally {
         }
         close_and_lift(sim, ScriptOptions::default(), &power_grasp());
         t.episodes += 1;
+        t.failures += u64::from(sim.failure().is_some());
         t.steps += sim.physics_steps();
         t.sim += sim.time();
     }
@@ -88,9 +95,9 @@ pub fn run(
     threads: usize,
     seconds: f64,
 ) -> Result<BenchFigures, BenchError> {
-    if envs == 0 || envs > 1024 {
+    if envs == 0 || envs > MAX_ENVS {
         return Err(BenchError::Settings(format!(
-            "envs = {envs}: must be in 1..=1024"
+            "envs = {envs}: must be in 1..={MAX_ENVS}"
         )));
     }
     if let Err(m) = crate::util::threads::check(threads) {
@@ -98,7 +105,8 @@ pub fn run(
     }
     if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3600.0) {
         return Err(BenchError::Settings(format!(
-            "seconds = {seconds}: must be in (0, 3600]"
+            "seconds = {}: must be in (0, 3600]",
+            crate::util::num::short(seconds)
         )));
     }
     let mut sims = (0..envs)
@@ -125,6 +133,7 @@ pub fn run(
     };
     let wall = start.elapsed().as_secs_f64();
     let episodes = tallies.iter().map(|t| t.episodes).sum();
+    let physics_failures = tallies.iter().map(|t| t.failures).sum();
     let physics_steps = tallies.iter().map(|t| t.steps).sum();
     let sim_seconds: f64 = tallies.iter().map(|t| t.sim).sum();
     let control_steps = sim_seconds / cfg.control_period;
@@ -132,6 +141,7 @@ pub fn run(
         envs,
         threads: if envs == 1 { 1 } else { threads },
         episodes,
+        physics_failures,
         physics_steps,
         control_steps,
         sim_seconds,

@@ -19,7 +19,10 @@ pub enum SimConfigError {
     #[error(transparent)]
     Load(#[from] ConfigError),
     /// A field is out of its allowed range.
-    #[error("sim config: field '{field}' = {value}: {message}")]
+    #[error(
+        "sim config: field '{field}' = {}: {message}",
+        crate::util::num::short(*.value)
+    )]
     Range {
         /// Dotted field name, e.g. `motors.fingers.kp`.
         field: String,
@@ -29,6 +32,13 @@ pub enum SimConfigError {
         message: String,
     },
 }
+
+/// Smallest physics step accepted (s): 10 kHz, 40x finer than the default.
+pub const MIN_DT: f64 = 1e-4;
+/// Longest control period accepted (s): ten times the default.
+pub const MAX_CONTROL_PERIOD: f64 = 2.0;
+/// Longest lift ramp and hold accepted (s).
+pub const MAX_LIFT_TIME: f64 = 10.0;
 
 /// Stiffness, damping of a group of position motors.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -321,8 +331,9 @@ impl SimConfig {
             }
         };
         pos("dt", self.dt)?;
-        if self.dt > 0.05 {
-            return Err(bad("dt", self.dt, "must be at most 0.05 s"));
+        // Bounded below too: a tiny step passes `> 0` but never finishes an episode.
+        if !(MIN_DT..=0.05).contains(&self.dt) {
+            return Err(bad("dt", self.dt, "must be in [1e-4, 0.05] s"));
         }
         if !(1..=64).contains(&self.substeps) {
             return Err(bad("substeps", self.substeps as f64, "must be in 1..=64"));
@@ -388,6 +399,13 @@ impl SimConfig {
                 "must be at least dt",
             ));
         }
+        if self.control_period > MAX_CONTROL_PERIOD {
+            return Err(bad(
+                "control_period",
+                self.control_period,
+                "must be at most 2 s",
+            ));
+        }
         if !self.gravity.is_finite() || self.gravity.abs() > 100.0 {
             return Err(bad("gravity", self.gravity, "must be finite, |g| <= 100"));
         }
@@ -434,7 +452,21 @@ impl SimConfig {
             return Err(bad("lift.height", self.lift.height, "must be at most 1 m"));
         }
         pos("lift.ramp_time", self.lift.ramp_time)?;
+        if self.lift.ramp_time > MAX_LIFT_TIME {
+            return Err(bad(
+                "lift.ramp_time",
+                self.lift.ramp_time,
+                "must be at most 10 s",
+            ));
+        }
         nonneg("lift.hold_time", self.lift.hold_time)?;
+        if self.lift.hold_time > MAX_LIFT_TIME {
+            return Err(bad(
+                "lift.hold_time",
+                self.lift.hold_time,
+                "must be at most 10 s",
+            ));
+        }
         nonneg("lift.success_height", self.lift.success_height)?;
         pos("failure.max_speed", self.failure.max_speed)?;
         pos("failure.max_object_travel", self.failure.max_object_travel)?;
@@ -496,6 +528,42 @@ mod tests {
             };
             let e = c.validate().unwrap_err().to_string();
             assert!(e.contains("object_angular_damping"), "{e}");
+        }
+        // A tiny value is printed short, not as 300 digits.
+        let e = SimConfig {
+            dt: 1e-300,
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("= 1e-300: must be in"), "{e}");
+        // Values that pass `> 0` but would never finish an episode.
+        for (field, c) in [
+            (
+                "'dt'",
+                SimConfig {
+                    dt: 1e-300,
+                    ..Default::default()
+                },
+            ),
+            (
+                "'control_period'",
+                SimConfig {
+                    control_period: 1e9,
+                    ..Default::default()
+                },
+            ),
+        ] {
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+        for (field, ramp, hold) in [("lift.ramp_time", 1e9, 0.5), ("lift.hold_time", 0.6, 1e9)] {
+            let mut c = SimConfig::default();
+            c.lift.ramp_time = ramp;
+            c.lift.hold_time = hold;
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
         }
         let mut c = SimConfig::default();
         c.motors.thumb.kp = f64::NAN;

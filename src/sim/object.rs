@@ -423,6 +423,17 @@ impl ObjectSpec {
         })
     }
 
+    /// [`ObjectSpec::from_object`] followed by the simulator's own checks
+    /// ([`ObjectSpec::validate`]): an object the simulator would refuse at every reset is
+    /// refused here, before any episode runs, with its name.
+    pub fn simulable(object: &Object) -> Result<ObjectSpec, String> {
+        let spec = ObjectSpec::from_object(object)
+            .map_err(|e| format!("object '{}' cannot be simulated: {e}", object.name))?;
+        spec.validate()
+            .map_err(|e| format!("object '{}' cannot be simulated: {e}", object.name))?;
+        Ok(spec)
+    }
+
     /// Height of the body origin above the table when the object rests upright (m).
     pub fn rest_height(&self) -> f64 {
         self.shape.rest_height()

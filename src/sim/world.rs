@@ -1267,13 +1267,22 @@ impl HandSim {
         })
     }
 
-    /// Height of the object's lowest point above the table top (m).
+    /// Height of the object's lowest point above the table top (m). For a compound
+    /// object, the lowest of its convex parts' vertices in the world frame: the
+    /// compound's own bounding box is its body-frame box turned with the object, which
+    /// lies below the object (under the table) once it is tilted.
     pub fn object_lowest_z(&self) -> f64 {
-        self.sets
-            .colliders
-            .get(self.object_collider)
-            .map(|c| c.compute_aabb().mins.z as f64)
-            .unwrap_or(f64::NAN)
+        let Some(c) = self.sets.colliders.get(self.object_collider) else {
+            return f64::NAN;
+        };
+        match c.shape().as_compound() {
+            Some(compound) => compound
+                .shapes()
+                .iter()
+                .map(|(part_pose, part)| part.compute_aabb(&(c.position() * part_pose)).mins.z)
+                .fold(f32::INFINITY, f32::min) as f64,
+            None => c.compute_aabb().mins.z as f64,
+        }
     }
 
     /// The lift coordinate (m above its start).

@@ -393,6 +393,16 @@ impl TrainConfig {
                 ),
             );
         }
+        // config.toml holds TOML integers (i64): a larger value given on the command
+        // line could not be saved with the run.
+        for (field, v) in [
+            ("seed", self.seed),
+            ("total_timesteps", self.total_timesteps),
+        ] {
+            if i64::try_from(v).is_err() {
+                return bad(field, format!("{v} must be at most {}", i64::MAX));
+            }
+        }
         if self.checkpoint_every == 0 {
             return bad("checkpoint_every", "must be at least 1".into());
         }
@@ -606,10 +616,31 @@ mod tests {
             ("threads = 0\n", "threads"),
             ("threads = 100000\n", "threads"),
             ("[ppo]\nlearning_rate = 1e300\n", "1e300 must be in (0, 1]"),
+            ("[env]\nclosing_period = 1e-300\n", "closing_period"),
+            (
+                "[env.randomization]\nfriction = [0.5, 1.0, 7.0]\n",
+                "`randomization.friction` has 3 numbers",
+            ),
+            ("[env.randomization]\nsize_scale = [1.0]\n", "size_scale"),
         ] {
             let e = TrainConfig::parse(p, text).unwrap_err().to_string();
             assert!(e.contains(field) && e.contains("x.toml"), "{text}: {e}");
         }
+    }
+
+    #[test]
+    fn integers_a_run_folder_cannot_hold_are_refused() {
+        let mut c = TrainConfig::parse(Path::new("x.toml"), "").unwrap();
+        c.seed = u64::MAX;
+        let e = c.validate(Path::new("x.toml")).unwrap_err().to_string();
+        assert!(
+            e.contains("`seed`") && e.contains("9223372036854775807"),
+            "{e}"
+        );
+        c.seed = 1;
+        c.total_timesteps = u64::MAX;
+        let e = c.validate(Path::new("x.toml")).unwrap_err().to_string();
+        assert!(e.contains("`total_timesteps`"), "{e}");
     }
 
     #[test]

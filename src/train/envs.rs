@@ -123,6 +123,10 @@ impl Env for ProbedGrasp {
         self.publish();
         s
     }
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        // The grasping environment inside (its object and episode summary).
+        self.env.as_any()
+    }
 }
 
 /// Loads the synergy model of `cfg`, checking that it exists, keeping its first

@@ -6,13 +6,20 @@
 //! when the environment reports none), `policy_loss`, `value_loss`, `entropy`,
 //! `approx_kl`, `clip_fraction`, `explained_variance`, `curriculum_level` (mean success
 //! rate `r_s` of the grasp environments' curricula; empty for other environments),
-//! `transitions_per_s` (this update) and `wall_s` (training seconds so far, over resumes).
+//! `transitions_per_s` (this update), `wall_s` (training seconds so far, over resumes) and
+//! `physics_failures` (episodes of this update that ended in a detected physics failure).
+//! Files written before the last column existed ([`HEADER_V1`]) are read with 0 failures.
 
 use super::TrainError;
 use std::path::Path;
 
 /// The CSV header.
 pub const HEADER: &str = "update,global_step,episodes,success_rate,episode_return,\
+episode_length,policy_loss,value_loss,entropy,approx_kl,clip_fraction,explained_variance,\
+curriculum_level,transitions_per_s,wall_s,physics_failures";
+
+/// The header of metrics files written before `physics_failures` was recorded.
+pub const HEADER_V1: &str = "update,global_step,episodes,success_rate,episode_return,\
 episode_length,policy_loss,value_loss,entropy,approx_kl,clip_fraction,explained_variance,\
 curriculum_level,transitions_per_s,wall_s";
 
@@ -52,6 +59,8 @@ pub struct MetricsRow {
     pub transitions_per_s: f64,
     /// Training wall time so far (s).
     pub wall_s: f64,
+    /// Episodes of this update that ended in a detected physics failure.
+    pub physics_failures: u64,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -62,7 +71,7 @@ impl MetricsRow {
     /// The row as one CSV line (no newline). Floats use Rust's shortest exact form.
     pub fn to_csv_line(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.update,
             self.global_step,
             self.episodes,
@@ -77,7 +86,8 @@ impl MetricsRow {
             opt(self.explained_variance),
             opt(self.curriculum_level),
             self.transitions_per_s,
-            self.wall_s
+            self.wall_s,
+            self.physics_failures
         )
     }
 
@@ -91,6 +101,7 @@ impl MetricsRow {
             ("losses/approx_kl", self.approx_kl),
             ("losses/clip_fraction", self.clip_fraction),
             ("charts/transitions_per_s", self.transitions_per_s),
+            ("charts/physics_failures", self.physics_failures as f64),
         ];
         let optional = [
             ("charts/success_rate", self.success_rate),
@@ -124,11 +135,12 @@ pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<MetricsRow>, TrainError>
         message,
     };
     let mut lines = text.lines();
-    match lines.next() {
-        Some(h) if h.trim_end() == HEADER => {}
+    let columns = match lines.next() {
+        Some(h) if h.trim_end() == HEADER => 16,
+        Some(h) if h.trim_end() == HEADER_V1 => 15,
         Some(_) => return Err(bad(1, format!("the header is not `{HEADER}`"))),
         None => return Err(bad(1, "the file is empty".into())),
-    }
+    };
     let mut rows: Vec<MetricsRow> = Vec::new();
     for (i, line) in lines.enumerate() {
         let n = i + 2;
@@ -136,8 +148,8 @@ pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<MetricsRow>, TrainError>
             continue;
         }
         let f: Vec<&str> = line.trim_end().split(',').collect();
-        if f.len() != 15 {
-            return Err(bad(n, format!("{} fields, expected 15", f.len())));
+        if f.len() != columns {
+            return Err(bad(n, format!("{} fields, expected {columns}", f.len())));
         }
         let int = |k: usize, name: &str| -> Result<u64, TrainError> {
             f[k].parse()
@@ -176,6 +188,11 @@ pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<MetricsRow>, TrainError>
             curriculum_level: maybe(12, "curriculum_level")?,
             transitions_per_s: real(13, "transitions_per_s")?,
             wall_s: real(14, "wall_s")?,
+            physics_failures: if columns > 15 {
+                int(15, "physics_failures")?
+            } else {
+                0
+            },
         };
         if let Some(prev) = rows.last() {
             if row.update <= prev.update {
@@ -242,6 +259,7 @@ mod tests {
             curriculum_level: success,
             transitions_per_s: 1234.5,
             wall_s: update as f64 * 0.1,
+            physics_failures: update % 2,
         }
     }
 
@@ -254,6 +272,17 @@ mod tests {
         assert!(text.lines().nth(1).unwrap().starts_with("1,64,3,,,,"));
         let back = parse_csv(Path::new("m.csv"), &text).unwrap();
         assert_eq!(back, rows);
+    }
+
+    #[test]
+    fn files_without_the_physics_failure_column_still_read() {
+        let r = row(2, Some(0.5), Some(1.0));
+        let line = r.to_csv_line();
+        let old = line.rsplit_once(',').unwrap().0;
+        let back = parse_csv(Path::new("m.csv"), &format!("{HEADER_V1}\n{old}\n")).unwrap();
+        assert_eq!(back[0].physics_failures, 0);
+        assert!(HEADER.ends_with(",physics_failures"));
+        assert!(r.scalars().contains(&("charts/physics_failures", 0.0)));
     }
 
     #[test]

@@ -37,7 +37,7 @@ pub mod tfevents;
 
 pub use config::{EnvKind, TrainConfig, TrainEnvConfig};
 pub use metrics::MetricsRow;
-pub use session::{Progress, StopReason, TrainSession, TrainSummary};
+pub use session::{OpenOptions, Progress, StopReason, TrainSession, TrainSummary};
 
 use std::path::PathBuf;
 
@@ -121,6 +121,37 @@ pub enum TrainError {
     RunExists {
         /// The run folder.
         dir: PathBuf,
+    },
+    /// Another process holds the run folder's lock.
+    #[error(
+        "run folder {dir} is in use by another process (it holds {dir}/.lock): wait for \
+         it to end, or train into another --out folder"
+    )]
+    RunInUse {
+        /// The run folder.
+        dir: PathBuf,
+    },
+    /// The run recorded metrics or a best checkpoint but has no latest checkpoint.
+    #[error("run folder {dir} has no {latest} but holds {detail}")]
+    LatestMissing {
+        /// The run folder.
+        dir: PathBuf,
+        /// The missing latest checkpoint folder.
+        latest: PathBuf,
+        /// What the folder holds, and what the user can do.
+        detail: String,
+    },
+    /// `--resume` with an `[env]` table that differs from the checkpoint's.
+    #[error(
+        "cannot resume from {checkpoint}: the environment differs from the one it was \
+         trained under in {keys}; restore those settings, or pass --allow-env-change to \
+         continue under the new ones"
+    )]
+    EnvChanged {
+        /// The checkpoint folder.
+        checkpoint: PathBuf,
+        /// The differing keys, comma-separated.
+        keys: String,
     },
     /// `--resume` without the metrics file while a best checkpoint exists: the best
     /// score so far is unknown, so the best checkpoint would be overwritten by a worse one.

@@ -41,19 +41,22 @@ pub fn primitives() -> Vec<(String, ObjectSpec)> {
 
 /// The object set called `name`: `primitives`, or anything `--objects` accepts (`train`,
 /// `unseen`, a folder, a manifest, names), converted for the simulator. Errors name the
-/// unknown set or the object that cannot be simulated.
+/// unknown set or the object that cannot be simulated (and the set: the manifest, the
+/// folder), checked for every object before any episode runs.
 pub fn object_set(name: &str) -> Result<Vec<(String, ObjectSpec)>, String> {
     if name == "primitives" {
         return Ok(primitives());
     }
     let ctx = crate::objects::sets::BuildContext::from_env();
     let objects = crate::objects::sets::load_objects(name, &ctx).map_err(|e| e.to_string())?;
+    // Every object is checked before any episode runs: one the simulator refuses would
+    // otherwise fail each of its episodes.
     objects
         .iter()
         .map(|o| {
-            ObjectSpec::from_object(o)
+            ObjectSpec::simulable(o)
                 .map(|s| (o.name.clone(), s))
-                .map_err(|e| format!("object '{}': {e}", o.name))
+                .map_err(|e| format!("{e} (in `{name}`)"))
         })
         .collect()
 }

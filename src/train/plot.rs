@@ -254,6 +254,7 @@ mod tests {
             curriculum_level: success,
             transitions_per_s: 1.0,
             wall_s: 1.0,
+            physics_failures: 0,
         }
     }
 

@@ -25,6 +25,19 @@ pub mod files {
     pub const EVENTS_PREFIX: &str = "events.out.tfevents.";
     /// Suffix of the TensorBoard event file.
     pub const EVENTS_SUFFIX: &str = ".grasp";
+    /// The lock file: an exclusive OS lock on it is held while a process trains in the
+    /// folder.
+    pub const LOCK: &str = ".lock";
+}
+
+/// How [`TrainSession::open_with`] treats an existing run folder.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OpenOptions {
+    /// Continue the run from `checkpoints/latest`.
+    pub resume: bool,
+    /// Resume even though the `[env]` table differs from the one the checkpoint was
+    /// trained under (the differing keys are logged).
+    pub allow_env_change: bool,
 }
 
 /// The latest checkpoint folder of run folder `dir`.
@@ -102,6 +115,9 @@ pub struct TrainSession {
     best: Option<f64>,
     wall_offset: f64,
     stop_flag: Option<Arc<AtomicBool>>,
+    /// The run folder's lock file, locked for the session's life (the OS releases the
+    /// lock when the process ends, however it ends).
+    _lock: std::fs::File,
 }
 
 fn now_unix() -> f64 {
@@ -110,8 +126,9 @@ fn now_unix() -> f64 {
         .map_or(0.0, |d| d.as_secs_f64())
 }
 
-/// Removes what a run killed before its first checkpoint left in `dir` (metrics, event
-/// files, plot, best checkpoint), so a fresh start does not mix with it.
+/// Removes what a run killed before its first update left in `dir` (a metrics file
+/// without rows, event files, plot), so a fresh start does not mix with it. The caller
+/// has checked that no metrics row and no best checkpoint exist.
 fn discard_unfinished(dir: &Path) -> Result<(), TrainError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
@@ -127,11 +144,87 @@ fn discard_unfinished(dir: &Path) -> Result<(), TrainError> {
             std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
         }
     }
-    let best = best_dir(dir);
-    if best.is_dir() {
-        std::fs::remove_dir_all(&best).map_err(io(&best))?;
-    }
     Ok(())
+}
+
+/// Takes the exclusive lock of run folder `dir` (created if needed), or says which
+/// folder is in use.
+fn lock_run_dir(dir: &Path) -> Result<std::fs::File, TrainError> {
+    std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let path = dir.join(files::LOCK);
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|source| TrainError::Io {
+            path: path.clone(),
+            source,
+        })?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(TrainError::RunInUse {
+            dir: dir.to_path_buf(),
+        }),
+        Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
+            tracing::warn!(
+                "{}: the file system does not support file locks; make sure no other \
+                 process trains into this folder",
+                dir.display()
+            );
+            Ok(file)
+        }
+        Err(std::fs::TryLockError::Error(source)) => Err(TrainError::Io { path, source }),
+    }
+}
+
+/// The keys (dotted, e.g. `env.randomization.friction`) whose values differ between two
+/// TOML tables.
+fn table_differences(prefix: &str, a: &toml::Table, b: &toml::Table, out: &mut Vec<String>) {
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    for k in keys {
+        let name = format!("{prefix}.{k}");
+        match (a.get(k), b.get(k)) {
+            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                table_differences(&name, x, y, out)
+            }
+            (x, y) if x != y => out.push(name),
+            _ => {}
+        }
+    }
+}
+
+/// The `[env]` keys in which `new` differs from the config the checkpoint in `latest`
+/// was trained under (`config.toml` beside it); empty when that file is absent.
+fn env_differences(latest: &Path, new: &TrainConfig) -> Result<Vec<String>, TrainError> {
+    let path = latest.join(files::CONFIG);
+    if !path.is_file() {
+        return Ok(Vec::new());
+    }
+    let text = std::fs::read_to_string(&path).map_err(|source| TrainError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let env_table = |t: &str, p: &Path| -> Result<toml::Table, TrainError> {
+        let table: toml::Table =
+            crate::util::config::parse_toml(p, t).map_err(TrainError::ConfigFile)?;
+        Ok(match table.get("env") {
+            Some(toml::Value::Table(e)) => e.clone(),
+            _ => toml::Table::new(),
+        })
+    };
+    // Both sides resolved the same way: the old file parsed to a config and written back.
+    let old = TrainConfig::parse(&path, &text)?.to_toml_string()?;
+    let old = env_table(&old, &path)?;
+    let new = env_table(&new.to_toml_string()?, Path::new("config.toml"))?;
+    let mut out = Vec::new();
+    table_differences("env", &old, &new, &mut out);
+    Ok(out)
 }
 
 /// The existing event file of `dir` and its start time, if any.
@@ -154,16 +247,60 @@ fn find_events(dir: &Path) -> Result<Option<(PathBuf, f64)>, TrainError> {
 }
 
 impl TrainSession {
-    /// Prepares run folder `dir` for `cfg`. A new run (`resume = false`) refuses a folder
-    /// that already holds a checkpoint. With `resume`, the trainer is restored from
-    /// `checkpoints/latest` (its network must match `cfg`; the other settings of `cfg`
-    /// apply from now on, so `total_timesteps` can be raised), the metrics rows after the
-    /// checkpoint's update are dropped and the TensorBoard file is rebuilt from the rest;
-    /// without the metrics file it refuses while `checkpoints/best` exists (the best score
-    /// would be lost). A folder without `checkpoints/latest` (a run killed before its
-    /// first checkpoint) starts afresh either way: its metrics, event file and best
-    /// checkpoint are replaced.
+    /// Prepares run folder `dir` for `cfg`: [`TrainSession::open_with`] with `resume`
+    /// and no change of `[env]` allowed.
     pub fn open(cfg: TrainConfig, dir: &Path, resume: bool) -> Result<TrainSession, TrainError> {
+        Self::open_with(
+            cfg,
+            dir,
+            OpenOptions {
+                resume,
+                allow_env_change: false,
+            },
+        )
+    }
+
+    /// Prepares run folder `dir` for `cfg`. First the folder's exclusive lock is taken
+    /// (held until the session is dropped or the process ends): a second process on the
+    /// same folder is refused. A new run (`resume = false`) refuses a folder that already
+    /// holds a checkpoint. With `resume`, the trainer is restored from
+    /// `checkpoints/latest` (its network must match `cfg`, and its `[env]` too unless
+    /// `allow_env_change`; the other settings of `cfg` apply from now on, so
+    /// `total_timesteps` can be raised), the metrics rows after the checkpoint's update
+    /// are dropped and the TensorBoard file is rebuilt from the rest; without the metrics
+    /// file it refuses while `checkpoints/best` exists (the best score would be lost).
+    /// A folder without `checkpoints/latest` starts afresh only when it recorded nothing
+    /// (a run killed during its first update); one with metrics rows or
+    /// `checkpoints/best` but no `checkpoints/latest` is refused with what to do, and
+    /// nothing is deleted.
+    pub fn open_with(
+        cfg: TrainConfig,
+        dir: &Path,
+        opts: OpenOptions,
+    ) -> Result<TrainSession, TrainError> {
+        // Fails on values the run folder's config.toml cannot hold, before the folder
+        // is created.
+        let config_text = cfg.to_toml_string()?;
+        let created = !dir.exists();
+        let lock = lock_run_dir(dir)?;
+        let opened = Self::open_locked(cfg, dir, opts, lock, config_text);
+        if opened.is_err() && created {
+            // Refused before anything was written: leave no empty folder behind.
+            let _ = std::fs::remove_file(dir.join(files::LOCK));
+            let _ = std::fs::remove_dir(dir);
+        }
+        opened
+    }
+
+    /// [`TrainSession::open_with`] once the folder's lock is held.
+    fn open_locked(
+        cfg: TrainConfig,
+        dir: &Path,
+        opts: OpenOptions,
+        lock: std::fs::File,
+        config_text: String,
+    ) -> Result<TrainSession, TrainError> {
+        let resume = opts.resume;
         let latest = latest_dir(dir);
         let ck_file = latest.join(CHECKPOINT_FILE);
         let metrics_path = dir.join(files::METRICS);
@@ -179,11 +316,58 @@ impl TrainSession {
                 best: best_dir(dir),
             });
         }
-        if resume && !has_checkpoint {
-            tracing::warn!(
-                "{} holds no checkpoint (the run stopped before its first): starting afresh",
-                dir.display()
-            );
+        if !has_checkpoint {
+            let rows = if metrics_path.is_file() {
+                metrics::read_csv(&metrics_path)?.len()
+            } else {
+                0
+            };
+            let best = best_dir(dir).join(CHECKPOINT_FILE).exists();
+            if rows > 0 || best {
+                let mut what = format!("{rows} metrics rows");
+                let advice = if best {
+                    what += &format!(" and {}", best_dir(dir).display());
+                    format!(
+                        "To continue from the best checkpoint, copy {} to {} and pass \
+                         --resume (the metrics rows after its update are dropped); or train \
+                         into another --out folder",
+                        best_dir(dir).display(),
+                        latest.display()
+                    )
+                } else {
+                    "Train into another --out folder (or delete this one to start it \
+                     afresh)"
+                        .to_string()
+                };
+                return Err(TrainError::LatestMissing {
+                    dir: dir.to_path_buf(),
+                    latest,
+                    detail: format!("{what}; nothing was changed. {advice}"),
+                });
+            }
+            if resume {
+                tracing::warn!(
+                    "{} holds no checkpoint and no metrics (the run stopped during its first \
+                     update): starting afresh",
+                    dir.display()
+                );
+            }
+        }
+        if resume && has_checkpoint {
+            let changed = env_differences(&latest, &cfg)?;
+            if !changed.is_empty() {
+                if !opts.allow_env_change {
+                    return Err(TrainError::EnvChanged {
+                        checkpoint: latest.clone(),
+                        keys: changed.join(", "),
+                    });
+                }
+                tracing::warn!(
+                    "resuming {} under a changed environment: {}",
+                    dir.display(),
+                    changed.join(", ")
+                );
+            }
         }
         let resume = resume && has_checkpoint;
         if !resume && dir.join(files::CONFIG).is_file() {
@@ -203,10 +387,6 @@ impl TrainSession {
             }
             rows.retain(|r| r.update <= trainer.update_index());
         }
-        std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
         let (events_path, t0_unix) = match if resume { find_events(dir)? } else { None } {
             Some(found) => found,
             None => {
@@ -227,7 +407,6 @@ impl TrainSession {
                 best = Some(best.map_or(s, |b: f64| b.max(s)));
             }
         }
-        let config_text = cfg.to_toml_string()?;
         let session = TrainSession {
             wall_offset: rows.last().map_or(0.0, |r| r.wall_s),
             synergy_json: model.map(|m| m.to_json()),
@@ -241,6 +420,7 @@ impl TrainSession {
             t0_unix,
             best,
             stop_flag: None,
+            _lock: lock,
         };
         write_atomic(&dir.join(files::CONFIG), session.config_text.as_bytes())?;
         session.write_logs()?;
@@ -337,6 +517,7 @@ impl TrainSession {
             curriculum_level: self.levels.as_ref().map(|p| p.mean()),
             transitions_per_s: m.transitions_per_sec,
             wall_s,
+            physics_failures: m.physics_failures as u64,
         }
     }
 
