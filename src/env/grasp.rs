@@ -753,3 +753,58 @@ pub fn run_episode(env: &mut GraspEnv, agent: &mut dyn Agent, seed: u64) -> Epis
         .cloned()
         .unwrap_or_else(|| unreachable!("a finished episode has a summary"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Side;
+
+    #[test]
+    fn a_refused_scene_ends_as_a_reported_failure() {
+        let robot = Robot::builtin(Side::Left);
+        let objects = vec![("box".to_string(), ObjectSpec::default_box())];
+        let mut env = GraspEnv::new(
+            &robot,
+            objects,
+            crate::synergy::default_model(),
+            SimConfig::default(),
+            EnvConfig::default(),
+        )
+        .expect("env");
+        // One ordinary episode leaves a world behind.
+        env.reset(1);
+        let n = env.action_spec().continuous;
+        let step = env.step(&Action {
+            cont: vec![0.0; n],
+            lift: true,
+        });
+        assert!(step.terminated);
+        // An object the simulator refuses (bypassing the set's validation, as a corrupt
+        // object would): the next episode must not run on the old world.
+        env.objects[0].1.mass = f64::NAN;
+        env.current_object = None;
+        env.reset(2);
+        let step = env.step(&Action {
+            cont: vec![0.0; n],
+            lift: true,
+        });
+        assert!(
+            step.terminated && step.info.physics_failure,
+            "{:?}",
+            step.info
+        );
+        let s = env.last_episode().expect("summary");
+        assert!(!s.success && s.physics_failure);
+        let kind = s.failure.as_ref().map(|f| f.failure.kind());
+        assert_eq!(kind, Some("refused_scene"), "{s:?}");
+        assert_eq!(s.steps, 0);
+        // A valid object afterwards runs again.
+        env.objects[0].1 = ObjectSpec::default_box();
+        env.reset(3);
+        let step = env.step(&Action {
+            cont: vec![0.0; n],
+            lift: true,
+        });
+        assert!(!step.info.physics_failure);
+    }
+}
