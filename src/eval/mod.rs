@@ -368,21 +368,19 @@ pub fn physics_line(r: &AgentResult) -> String {
         "{}: {} of {n} episodes ended in a physics failure",
         r.agent, r.physics_failures
     );
+    // "name count, name count" of a tally.
+    let tally = |m: &BTreeMap<String, usize>| {
+        let parts: Vec<String> = m.iter().map(|(k, v)| format!("{k} {v}")).collect();
+        parts.join(", ")
+    };
     if !r.failures_by_kind.is_empty() {
-        let kinds: Vec<String> = r
-            .failures_by_kind
-            .iter()
-            .map(|(k, v)| format!("{k} {v}"))
-            .collect();
-        s.push_str(&format!(" ({})", kinds.join(", ")));
+        s.push_str(&format!(" ({})", tally(&r.failures_by_kind)));
     }
     if !r.penetrations_by_body.is_empty() {
-        let bodies: Vec<String> = r
-            .penetrations_by_body
-            .iter()
-            .map(|(k, v)| format!("{k} {v}"))
-            .collect();
-        s.push_str(&format!("; deep contacts with {}", bodies.join(", ")));
+        s.push_str(&format!(
+            "; deep contacts with {}",
+            tally(&r.penetrations_by_body)
+        ));
     }
     if r.objects.iter().all(|o| o.deepest_contacts.is_empty()) {
         // An evaluation saved before the deepest contacts were recorded.

@@ -25,8 +25,8 @@
 //! (each within [`NORMAL_TOLERANCE`]); otherwise it is computed again from a cold start,
 //! and when that fails too (traced: a fingertip 1.2 mm from a pyramid's apex along the
 //! previous normal got 44 mm deep EPA normals from both starts) the previous manifold is
-//! kept, its separations measured at the current pose. Two support-point queries per
-//! pair and step; speculative (separated) manifolds are not judged.
+//! kept, its separations measured at the current pose. Up to four support-point queries
+//! per penetrating pair and step; speculative (separated) manifolds are not judged.
 //!
 //! [`HullContactDispatcher`] is parry's [`DefaultQueryDispatcher`] except for these
 //! manifolds; compound shapes dispatch their parts back to it.
@@ -262,51 +262,41 @@ pub fn separation_along(
 /// near contact; the defects it catches are centimetres.
 pub const NORMAL_TOLERANCE: Real = 5.0e-3;
 
-/// The signed separation a manifold claims (its GJK/EPA point: the last point, whose
-/// features are unknown) and the exact separation of the shapes along its normal; `None`
-/// for a manifold without that point.
-fn claimed_and_exact(
-    pos12: &Pose,
-    f1: &Features,
-    f2: &Features,
-    manifold: &Manifold,
-) -> Option<(Real, Real)> {
+/// The signed separation a manifold claims: that of its GJK/EPA point (the last point,
+/// whose features are unknown); `None` for a manifold without that point.
+fn claimed(manifold: &Manifold) -> Option<Real> {
     let last = manifold.points.last()?;
-    if last.fid1 != PackedFeatureId::UNKNOWN || last.fid2 != PackedFeatureId::UNKNOWN {
-        return None;
-    }
-    let ((p1, r1), (p2, r2)) = (*f1, *f2);
-    let exact = separation_along(pos12, p1, r1, p2, r2, manifold.local_n1);
-    Some((last.dist, exact))
+    (last.fid1 == PackedFeatureId::UNKNOWN && last.fid2 == PackedFeatureId::UNKNOWN)
+        .then_some(last.dist)
 }
 
-/// Whether `manifold`'s normal is a contact normal: the separation its GJK/EPA point
-/// claims is the exact separation along it, and no smaller than `bound` (the separation
-/// along another direction: the true contact normal maximises the separation along it
-/// over all directions, for separated and penetrating shapes alike). Only manifolds with
-/// a penetrating point are judged; one whose GJK/EPA point was not kept is judged by
-/// `bound` alone.
+/// The exact separation of the two shapes along `n1` (see [`separation_along`]).
+fn exact_along(pos12: &Pose, f1: &Features, f2: &Features, n1: Vector) -> Real {
+    let ((p1, r1), (p2, r2)) = (*f1, *f2);
+    separation_along(pos12, p1, r1, p2, r2, n1)
+}
+
+/// Whether `manifold`'s normal is a contact normal: its exact separation is no smaller
+/// than the separation its GJK/EPA point claims, nor than `bound()` (the separation along
+/// the previous normal: the true contact normal maximises the separation along it over
+/// all directions, for separated and penetrating shapes alike). Only manifolds with a
+/// penetrating point are judged; one whose GJK/EPA point was not kept is judged by the
+/// bound alone. `bound` is evaluated only for judged manifolds.
 fn acceptable(
     pos12: &Pose,
     f1: &Features,
     f2: &Features,
     manifold: &Manifold,
-    bound: Real,
+    bound: &dyn Fn() -> Real,
 ) -> bool {
     // Separated or touching: a speculative contact, whose normal GJK leaves approximate
     // near the prediction distance, pushes nothing apart.
     if manifold.points.iter().all(|p| p.dist >= -NORMAL_TOLERANCE) {
         return true;
     }
-    match claimed_and_exact(pos12, f1, f2, manifold) {
-        Some((claimed, exact)) => {
-            exact >= claimed - NORMAL_TOLERANCE && exact >= bound - NORMAL_TOLERANCE
-        }
-        None => {
-            let ((p1, r1), (p2, r2)) = (*f1, *f2);
-            separation_along(pos12, p1, r1, p2, r2, manifold.local_n1) >= bound - NORMAL_TOLERANCE
-        }
-    }
+    let exact = exact_along(pos12, f1, f2, manifold.local_n1);
+    claimed(manifold).is_none_or(|c| exact >= c - NORMAL_TOLERANCE)
+        && exact >= bound() - NORMAL_TOLERANCE
 }
 
 /// parry's manifold, checked (see [`acceptable`]): GJK, warm-started from the previous
@@ -326,12 +316,17 @@ fn verified_manifold(
 ) {
     let old = manifold.points.clone();
     let (old_n1, old_n2) = (manifold.local_n1, manifold.local_n2);
-    let ((p1, r1), (p2, r2)) = (*f1, *f2);
-    let bound = old_n1.try_normalize().map_or(Real::NEG_INFINITY, |n| {
-        separation_along(pos12, p1, r1, p2, r2, n)
-    });
+    // The separation along the previous normal, computed once and only when needed.
+    let bound_cell = std::cell::OnceCell::new();
+    let bound = || {
+        *bound_cell.get_or_init(|| {
+            old_n1
+                .try_normalize()
+                .map_or(Real::NEG_INFINITY, |n| exact_along(pos12, f1, f2, n))
+        })
+    };
     pfm_manifold(pos12, f1, f2, prediction, manifold);
-    if acceptable(pos12, f1, f2, manifold, bound) {
+    if acceptable(pos12, f1, f2, manifold, &bound) {
         return;
     }
     REJECTED.with(|c| c.set(c.get() + 1));
@@ -342,11 +337,11 @@ fn verified_manifold(
     manifold.local_n1 = Vector::ZERO;
     manifold.local_n2 = Vector::ZERO;
     pfm_manifold(pos12, f1, f2, prediction, manifold);
-    if acceptable(pos12, f1, f2, manifold, bound) {
+    if acceptable(pos12, f1, f2, manifold, &bound) {
         return;
     }
     FAILED.with(|c| c.set(c.get() + 1));
-    if old_n1.try_normalize().is_some() && (!old.is_empty() || bound > 0.0) {
+    if old_n1.try_normalize().is_some() && (!old.is_empty() || bound() > 0.0) {
         // Both runs failed (traced: a fingertip 1.2 mm from a pyramid's apex along the
         // previous normal, which proves the two apart, got EPA normals 44 mm deep from a
         // warm and a cold start): the previous manifold, its points' separations measured
@@ -358,7 +353,7 @@ fn verified_manifold(
         manifold.update_separations(pos12);
         return;
     }
-    let sep = |m: &Manifold| separation_along(pos12, p1, r1, p2, r2, m.local_n1);
+    let sep = |m: &Manifold| exact_along(pos12, f1, f2, m.local_n1);
     if manifold.points.is_empty() || (!first.points.is_empty() && sep(&first) > sep(manifold)) {
         *manifold = first;
     }

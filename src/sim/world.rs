@@ -391,9 +391,8 @@ pub struct HandSim {
     targets: [f64; 24],
     lift_target: f64,
     physics_steps: u64,
-    failure: Option<PhysicsFailure>,
-    /// The physics step at which `failure` was detected.
-    failure_step: u64,
+    /// The physics failure that ended the episode, with its step.
+    failure: Option<FailureReport>,
     /// The deepest contact of the object since the reset.
     deepest: Option<ObjectContact>,
     /// Each hand collider's link name (for failure reports).
@@ -748,7 +747,6 @@ impl HandSim {
             lift_target: 0.0,
             physics_steps: 0,
             failure: None,
-            failure_step: 0,
             deepest: None,
             collider_links,
             recorder: None,
@@ -843,7 +841,6 @@ impl HandSim {
         self.soft = SoftBodySet::new();
         self.physics_steps = 0;
         self.failure = None;
-        self.failure_step = 0;
         self.deepest = None;
         // Lift frames: frame1 at the flange position with x along world z; the forearm at
         // `root_pose` when the lift coordinate is 0.
@@ -967,20 +964,17 @@ impl HandSim {
 
     /// The physics failure that ended the episode, if any.
     pub fn failure(&self) -> Option<&PhysicsFailure> {
-        self.failure.as_ref()
+        self.failure.as_ref().map(|f| &f.failure)
     }
 
     /// The physics step (since the reset) at which [`HandSim::failure`] was detected.
     pub fn failure_step(&self) -> Option<u64> {
-        self.failure.as_ref().map(|_| self.failure_step)
+        self.failure.as_ref().map(|f| f.step)
     }
 
     /// [`HandSim::failure`] with its step.
     pub fn failure_report(&self) -> Option<FailureReport> {
-        self.failure.as_ref().map(|f| FailureReport {
-            failure: f.clone(),
-            step: self.failure_step,
-        })
+        self.failure.clone()
     }
 
     /// The deepest contact of the object (with the hand or the table) seen since the
@@ -994,8 +988,10 @@ impl HandSim {
     /// detected physics failure does: every later step does nothing.
     pub fn fail(&mut self, failure: PhysicsFailure) {
         if self.failure.is_none() {
-            self.failure_step = self.physics_steps;
-            self.failure = Some(failure);
+            self.failure = Some(FailureReport {
+                failure,
+                step: self.physics_steps,
+            });
         }
     }
 
@@ -1035,12 +1031,15 @@ impl HandSim {
             );
         }));
         self.physics_steps += 1;
-        self.failure = if stepped.is_err() {
+        let failure = if stepped.is_err() {
             Some(PhysicsFailure::Panic)
         } else {
             self.check_physics()
         };
-        self.failure_step = self.physics_steps;
+        self.failure = failure.map(|failure| FailureReport {
+            failure,
+            step: self.physics_steps,
+        });
         self.record_step();
         self.failure.is_none()
     }
@@ -1444,7 +1443,7 @@ impl HandSim {
         }
         let lowest = self.object_lowest_z();
         let in_contact = self.hand_object_force() > 0.0;
-        let failure = self.failure.clone();
+        let failure = self.failure().cloned();
         LiftOutcome {
             success: failure.is_none() && lowest >= l.success_height && in_contact,
             object_lowest_z: lowest,
