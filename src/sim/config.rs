@@ -171,6 +171,20 @@ pub struct ContactConfig {
     /// (parry's contacts as they are) when absent.
     #[serde(default)]
     pub check_normals: bool,
+    /// rapier's contact recycling (m): a colliding pair whose relative pose drifted less
+    /// than this since its last contact computation keeps its contact points and normal
+    /// frozen instead of computing them again; 0 turns recycling off. rapier's default,
+    /// 0.05, is kept when the field is absent (see configs/sim.toml).
+    #[serde(default = "default_recycle_distance")]
+    pub recycle_distance: f64,
+}
+
+fn default_pgs_iterations() -> usize {
+    1
+}
+
+fn default_recycle_distance() -> f64 {
+    0.05
 }
 
 fn default_contact_frequency() -> f64 {
@@ -194,6 +208,7 @@ impl Default for ContactConfig {
             static_natural_frequency: default_static_contact_frequency(),
             static_damping_ratio: default_contact_damping(),
             check_normals: false,
+            recycle_distance: default_recycle_distance(),
         }
     }
 }
@@ -218,6 +233,10 @@ pub struct SimConfig {
     pub dt: f64,
     /// Solver substeps per physics step (rapier's `num_solver_iterations`).
     pub substeps: usize,
+    /// Projected Gauss-Seidel iterations per substep (rapier's
+    /// `num_internal_pgs_iterations`); rapier's default, 1, when absent.
+    #[serde(default = "default_pgs_iterations")]
+    pub pgs_iterations: usize,
     /// rapier's `max_ccd_substeps`: 0 turns continuous collision detection off (default).
     /// Rapier otherwise sweeps every fast body against the table each step, and for a
     /// compound object it recomputes each convex part's mass properties in every sweep.
@@ -338,6 +357,13 @@ impl SimConfig {
         if !(1..=64).contains(&self.substeps) {
             return Err(bad("substeps", self.substeps as f64, "must be in 1..=64"));
         }
+        if !(1..=64).contains(&self.pgs_iterations) {
+            return Err(bad(
+                "pgs_iterations",
+                self.pgs_iterations as f64,
+                "must be in 1..=64",
+            ));
+        }
         if self.ccd_substeps > 16 {
             return Err(bad(
                 "ccd_substeps",
@@ -390,6 +416,14 @@ impl SimConfig {
             if v > 100.0 {
                 return Err(bad(field, v, "must be at most 100"));
             }
+        }
+        nonneg("contacts.recycle_distance", c.recycle_distance)?;
+        if c.recycle_distance > 0.1 {
+            return Err(bad(
+                "contacts.recycle_distance",
+                c.recycle_distance,
+                "must be at most 0.1 m",
+            ));
         }
         pos("control_period", self.control_period)?;
         if self.control_period < self.dt {
@@ -494,6 +528,21 @@ mod tests {
     }
 
     #[test]
+    fn absent_solver_and_recycling_fields_keep_rapiers_defaults() {
+        let text: String = DEFAULT_SIM_TOML
+            .lines()
+            .filter(|l| !l.starts_with("pgs_iterations") && !l.starts_with("recycle_distance"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let c = SimConfig::parse(Path::new("s.toml"), &text).unwrap();
+        assert_eq!(c.pgs_iterations, 1);
+        assert_eq!(c.contacts.recycle_distance, 0.05);
+        let d = SimConfig::default();
+        assert_eq!(d.pgs_iterations, 4);
+        assert_ne!(c, d);
+    }
+
+    #[test]
     fn out_of_range_fields_are_named() {
         let mut c = SimConfig::default();
         c.friction.hand = 1.2;
@@ -565,6 +614,23 @@ mod tests {
             let e = c.validate().unwrap_err().to_string();
             assert!(e.contains(field), "{e}");
         }
+        for bad in [0, 65] {
+            let c = SimConfig {
+                pgs_iterations: bad,
+                ..Default::default()
+            };
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("pgs_iterations"), "{e}");
+        }
+        for bad in [-0.01, f64::NAN, 0.2] {
+            let mut c = SimConfig::default();
+            c.contacts.recycle_distance = bad;
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("contacts.recycle_distance"), "{e}");
+        }
+        let mut c = SimConfig::default();
+        c.contacts.recycle_distance = 0.0;
+        assert!(c.validate().is_ok(), "0 turns recycling off");
         let mut c = SimConfig::default();
         c.motors.thumb.kp = f64::NAN;
         assert!(c

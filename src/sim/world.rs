@@ -709,10 +709,13 @@ impl HandSim {
             ..Default::default()
         };
         params.num_solver_iterations = cfg.substeps;
+        params.num_internal_pgs_iterations = cfg.pgs_iterations;
         params.max_ccd_substeps = cfg.ccd_substeps;
         params.contact_clustering = cfg.contact_clustering;
         params.normalized_prediction_distance = cfg.prediction_distance as f32;
         let c = cfg.contacts;
+        params.contact_recycling = c.recycle_distance > 0.0;
+        params.normalized_contact_recycle_distance = c.recycle_distance as f32;
         params.contact_softness =
             SpringCoefficients::new(c.natural_frequency as f32, c.damping_ratio as f32);
         params.static_contact_softness = SpringCoefficients::new(
@@ -1148,10 +1151,9 @@ impl HandSim {
     fn deepest_object_contact(&self) -> Option<ObjectContact> {
         let mut best: Option<ObjectContact> = None;
         for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
-            let Some((m, c)) = pair.find_deepest_contact() else {
+            let Some((m, depth)) = self.pair_depth(pair) else {
                 continue;
             };
-            let depth = -(c.dist as f64);
             if depth <= 0.0 || best.as_ref().is_some_and(|b| b.depth >= depth) {
                 continue;
             }
@@ -1166,6 +1168,31 @@ impl HandSim {
                 part: (self.object.shape.part_count() > 1).then_some(sub as usize),
                 step: self.physics_steps,
             });
+        }
+        best
+    }
+
+    /// The deepest penetration (m) of a contact pair's manifolds at the current poses
+    /// (negative when none touches): each contact point's two body-attached points
+    /// measured along its manifold's normal, as the solver measures them. rapier keeps a
+    /// manifold whose pair barely moved since it was computed (its contact recycling), and
+    /// the separations stored in its points are then those of the step it was computed in.
+    fn pair_depth<'a>(&self, pair: &'a ContactPair) -> Option<(&'a ContactManifold, f64)> {
+        let colliders = &self.sets.colliders;
+        let (co1, co2) = (&colliders[pair.collider1], &colliders[pair.collider2]);
+        let at =
+            |co: &Collider, sub: Option<&Pose>| sub.map_or(*co.position(), |p| *co.position() * *p);
+        let mut best: Option<(&ContactManifold, f64)> = None;
+        for m in pair.manifolds() {
+            let pos12 = at(co1, m.subshape_pos1()).inverse() * at(co2, m.subshape_pos2());
+            let depth = m
+                .points
+                .iter()
+                .map(|p| (p.local_p1 - pos12 * p.local_p2).dot(m.local_n1))
+                .fold(Real::NEG_INFINITY, Real::max) as f64;
+            if depth.is_finite() && best.is_none_or(|(_, d)| depth > d) {
+                best = Some((m, depth));
+            }
         }
         best
     }
@@ -1487,6 +1514,32 @@ mod tests {
         let f = sim.pair_force(sim.table, sim.object_collider);
         assert!((f - 0.5 * 9.81).abs() < 0.05 * 4.905, "table force {f}");
         assert_eq!(sim.hand_object_force(), 0.0);
+    }
+
+    #[test]
+    fn the_deepest_contact_is_measured_at_the_current_pose_not_where_rapier_computed_it() {
+        // rapier recycles the contacts of a pair that barely moved: their points keep the
+        // separations of the step they were computed in. A resting box whose contacts were
+        // computed at rest, then found 4 mm into the table, is 4 mm deep.
+        let robot = Robot::builtin(Side::Left);
+        let obj = ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.8);
+        let mut sim = HandSim::new(&robot, obj.clone(), SimConfig::default()).unwrap();
+        sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.3, 0.0))
+            .unwrap();
+        for _ in 0..60 {
+            assert!(sim.step_physics());
+        }
+        let rest = sim.deepest_object_contact().map_or(0.0, |c| c.depth);
+        assert!(rest < 1e-3, "resting box {rest} m deep");
+        let co = &mut sim.sets.colliders[sim.object_collider];
+        let mut pose = *co.position();
+        pose.translation.z -= 0.004;
+        co.set_position(pose);
+        let c = sim
+            .deepest_object_contact()
+            .expect("a contact with the table");
+        assert_eq!(c.with, "table");
+        assert!((c.depth - rest - 0.004).abs() < 5e-4, "{} m deep", c.depth);
     }
 
     #[test]
