@@ -169,3 +169,39 @@ fn a_full_effort_squeeze_stays_within_a_few_millimetres_of_the_surface() {
     assert!(built_in < 0.0065, "median deepest contact {built_in}");
     assert!(unconverged > 0.0075, "one iteration: median {unconverged}");
 }
+
+#[test]
+fn bench_env_splits_the_episodes_into_phases() {
+    let (ok, out, err) = grasp(&[
+        "--json",
+        "bench",
+        "env",
+        "--envs",
+        "2",
+        "--threads",
+        "1",
+        "--seconds",
+        "2",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let p = &v["phases"];
+    for phase in ["reset", "closing", "policy", "lift"] {
+        assert!(p[phase]["physics_steps"].is_u64(), "{phase}: {p}");
+        assert!(p[phase]["wall_s"].as_f64().unwrap() >= 0.0, "{phase}: {p}");
+    }
+    assert!(p["closing"]["physics_steps"].as_u64().unwrap() > 0, "{p}");
+    assert_eq!(p["reset"]["physics_steps"], 0, "{p}");
+    let (ok, out, err) = grasp(&[
+        "bench",
+        "env",
+        "--envs",
+        "2",
+        "--threads",
+        "1",
+        "--seconds",
+        "2",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("physics steps per episode"), "{out}");
+}

@@ -446,6 +446,10 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
                 "episodes": r.iter().map(|f| f.episodes).sum::<u64>(),
                 "physics_failures": r.iter().map(|f| f.physics_failures).sum::<u64>(),
                 "wall_s": r.iter().map(|f| f.wall_s).sum::<f64>(),
+                "phases": r
+                    .iter()
+                    .filter_map(|f| f.phases)
+                    .reduce(|a, b| a.plus(&b)),
                 "runs": r,
             })
         })
@@ -468,7 +472,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    for c in &per_config {
+    for (c, r) in per_config.iter().zip(&runs) {
         let num = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
         println!(
             "{}: grasp env, random agent, {} envs on {threads} threads, objects {}: {:.1} env steps/s, {:.2} episodes/s (median of {} rounds; {} steps, {} episodes ({} ended in a physics failure) in {:.1} s; reset and stage 1 included)",
@@ -483,9 +487,33 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
             c["physics_failures"],
             num("wall_s"),
         );
+        print_phases(r);
     }
     if let Some(r) = ratio {
         println!("ratio first/second: {r:.2}x env steps/s");
     }
     Ok(())
+}
+
+/// The phase split of one config's rounds: per phase the physics steps per episode and
+/// the share of the physics steps and of the environments' time.
+fn print_phases(runs: &[grasp::env::bench::EnvFigures]) {
+    let Some(t) = runs
+        .iter()
+        .filter_map(|f| f.phases)
+        .reduce(|a, b| a.plus(&b))
+    else {
+        return;
+    };
+    let episodes = runs.iter().map(|f| f.episodes).sum::<u64>().max(1) as f64;
+    let total = t.total();
+    let share = |x: f64, of: f64| if of > 0.0 { 100.0 * x / of } else { 0.0 };
+    for (name, p) in t.phases() {
+        println!(
+            "  {name:8} {:6.1} physics steps per episode ({:4.1} % of the steps), {:4.1} % of the time",
+            p.physics_steps as f64 / episodes,
+            share(p.physics_steps as f64, total.physics_steps as f64),
+            share(p.wall_s, total.wall_s),
+        );
+    }
 }

@@ -2,6 +2,8 @@
 //! probability) stepping a [`VecEnv`], resets and stage 1 included.
 
 use super::api::{Action, EnvError, VecEnv};
+use super::grasp::GraspEnv;
+use super::phases::PhaseTally;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use serde::Serialize;
@@ -28,6 +30,17 @@ pub struct EnvFigures {
     pub env_steps_per_s: f64,
     /// Episodes per wall second.
     pub episodes_per_s: f64,
+    /// Physics steps and time per episode phase, summed over the environments (`None`
+    /// when they are not grasping environments).
+    pub phases: Option<PhaseTally>,
+}
+
+/// The phase tallies of `venv`'s grasping environments, summed (`None` when it has none).
+pub fn phase_tally(venv: &VecEnv) -> Option<PhaseTally> {
+    (0..venv.num_envs())
+        .filter_map(|i| venv.env(i)?.as_any()?.downcast_ref::<GraspEnv>())
+        .map(|g| *g.phases())
+        .reduce(|a, b| a.plus(&b))
 }
 
 /// How long a measurement runs.
@@ -44,6 +57,7 @@ pub fn random_agent(venv: &mut VecEnv, seed: u64, until: Until) -> Result<EnvFig
     let n = venv.action_spec().continuous;
     let envs = venv.num_envs();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let tally0 = phase_tally(venv);
     let start = Instant::now();
     venv.reset(seed)?;
     let (mut env_steps, mut episodes, mut physics_failures) = (0u64, 0u64, 0u64);
@@ -77,5 +91,6 @@ pub fn random_agent(venv: &mut VecEnv, seed: u64, until: Until) -> Result<EnvFig
         wall_s,
         env_steps_per_s: env_steps as f64 / wall_s,
         episodes_per_s: episodes as f64 / wall_s,
+        phases: phase_tally(venv).map(|t| t.since(&tally0.unwrap_or_default())),
     })
 }

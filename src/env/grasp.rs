@@ -28,6 +28,7 @@ pub use super::closing::closing_target;
 use super::closing::{ClosingPath, ClosingSpace};
 use super::curriculum::{Curriculum, CurriculumConfig};
 use super::obs::{FrameStack, Modality, ObsLayout};
+use super::phases::{Phase, PhaseTally};
 use super::randomize::Randomization;
 use super::reward;
 use super::stream::{ObjectStream, StreamConfig};
@@ -39,6 +40,7 @@ use crate::sim::{
 use crate::synergy::SynergyModel;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
+use std::time::Instant;
 
 /// What happens when an episode reaches `max_steps` without a lift.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -256,6 +258,8 @@ pub struct GraspEnv {
     /// episode's lift, once it lifted.
     lift_grip: Option<(bool, f64)>,
     last: Option<EpisodeSummary>,
+    /// Physics steps and wall time per episode phase, over all episodes.
+    phases: PhaseTally,
     done: bool,
 }
 
@@ -305,6 +309,7 @@ impl GraspEnv {
             touched_in_stage1: false,
             lift_grip: None,
             last: None,
+            phases: PhaseTally::default(),
             done: true,
         })
     }
@@ -360,12 +365,31 @@ impl GraspEnv {
         self.last.as_ref()
     }
 
+    /// Physics steps and wall time this environment spent in each phase of its episodes
+    /// so far.
+    pub fn phases(&self) -> &PhaseTally {
+        &self.phases
+    }
+
     /// Places object and hand for the episode of `seed` (object choice and eq. 6
     /// perturbation), without closing, the hand in the start posture of the policy's
     /// stage 1. The same seed gives the same scene, so different agents can be compared
     /// on identical initial object poses.
     pub fn reset_scene(&mut self, seed: u64) -> Result<(), SimError> {
         self.reset_scene_from(seed, self.path.start())
+    }
+
+    /// [`GraspEnv::reset_scene_from`], its time counted in the reset phase.
+    fn timed_reset(&mut self, seed: u64, start: [f64; 24]) -> Result<(), SimError> {
+        let t = Instant::now();
+        let r = self.reset_scene_from(seed, start);
+        self.phases.reset.add(0, t);
+        r
+    }
+
+    /// The physics steps of the current episode so far.
+    fn physics_steps(&self) -> u64 {
+        self.sim.physics_steps()
     }
 
     /// [`GraspEnv::reset_scene`] with the hand in posture `start`.
@@ -513,7 +537,9 @@ impl GraspEnv {
     /// through it kept for the episode's summary.
     fn lift_and_judge(&mut self) -> LiftOutcome {
         let thumb = self.sim.sensors().tactile[4] == 1;
+        let (t, before) = (Instant::now(), self.physics_steps());
         let out = self.sim.lift_and_judge();
+        self.phases.lift.add(self.physics_steps() - before, t);
         self.lift_grip = Some((thumb, out.grip_effort));
         out
     }
@@ -549,7 +575,7 @@ impl GraspEnv {
         stop_on_touch: bool,
         seed: u64,
     ) -> Result<EpisodeSummary, SimError> {
-        if let Err(e) = self.reset_scene_from(seed, self.start) {
+        if let Err(e) = self.timed_reset(seed, self.start) {
             // Refused like a policy episode's scene (see `Env::reset`): a reported
             // failure, not a run on the previous episode's world.
             self.sim.fail(PhysicsFailure::RefusedScene {
@@ -567,6 +593,7 @@ impl GraspEnv {
         let finger_joints: [std::ops::Range<usize>; 3] = [2..6, 6..10, 10..14];
         let settle = (0.3 / self.cfg.closing_period).round() as usize;
         let mut ok = true;
+        let t = Instant::now();
         'outer: for i in 1..=n + settle {
             for (j, t) in targets.iter_mut().enumerate() {
                 let f = finger_joints.iter().position(|r| r.contains(&j));
@@ -592,6 +619,7 @@ impl GraspEnv {
                 }
             }
         }
+        self.phases.closing.add(self.physics_steps(), t);
         if !ok {
             self.finish(false, false, true);
         } else {
@@ -622,7 +650,7 @@ impl Env for GraspEnv {
 
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         self.stack.clear();
-        if let Err(e) = self.reset_scene(seed) {
+        if let Err(e) = self.timed_reset(seed, self.path.start()) {
             // A scene the simulator refuses is reported as a physics failure on the
             // first step (never run on the previous episode's final world).
             self.sim.fail(PhysicsFailure::RefusedScene {
@@ -635,7 +663,9 @@ impl Env for GraspEnv {
             self.done = false;
             return self.stack.stacked();
         }
+        let (t, before) = (Instant::now(), self.physics_steps());
         self.touched_in_stage1 = self.stage1();
+        self.phases.closing.add(self.physics_steps() - before, t);
         let zero = vec![0.0; self.synergy.n_components() + 2];
         self.push_frame(&zero);
         self.stack.stacked()
@@ -648,6 +678,22 @@ impl Env for GraspEnv {
         if a.lift {
             return self.lift();
         }
+        let (t, before, lift0) = (Instant::now(), self.physics_steps(), self.phases.lift);
+        let step = self.policy_step(a);
+        // A step at the step cap may end in the lift, which counts as its own phase.
+        let mut spent = Phase::default();
+        spent.add(self.physics_steps() - before, t);
+        self.phases.policy = self
+            .phases
+            .policy
+            .plus(spent.minus(self.phases.lift.minus(lift0)));
+        step
+    }
+}
+
+impl GraspEnv {
+    /// One control step of the policy's action `a` (not a lift).
+    fn policy_step(&mut self, a: &Action) -> Step {
         let s = self.sim.sensors();
         let commanded = self.sim.targets();
         let base = self.cfg.action.anchor.pick(&s.q, &commanded);
@@ -758,6 +804,48 @@ pub fn run_episode(env: &mut GraspEnv, agent: &mut dyn Agent, seed: u64) -> Epis
 mod tests {
     use super::*;
     use crate::robot::Side;
+
+    #[test]
+    fn each_phase_counts_its_own_physics_steps() {
+        let robot = Robot::builtin(Side::Left);
+        let objects = vec![("box".to_string(), ObjectSpec::default_box())];
+        let cfg = SimConfig::default();
+        let per_control = cfg.steps_per_control() as u64;
+        let mut env = GraspEnv::new(
+            &robot,
+            objects,
+            crate::synergy::default_model(),
+            cfg,
+            EnvConfig::default(),
+        )
+        .expect("env");
+        env.reset(1);
+        let closing = env.phases().closing.physics_steps;
+        assert!(closing > 0);
+        assert_eq!(closing, env.sim.physics_steps());
+        let n = env.action_spec().continuous;
+        for lift in [false, false, true] {
+            env.step(&Action {
+                cont: vec![0.0; n],
+                lift,
+            });
+        }
+        let p = *env.phases();
+        assert_eq!(p.policy.physics_steps, 2 * per_control);
+        assert!(p.lift.physics_steps > 0);
+        assert_eq!(p.reset.physics_steps, 0);
+        assert_eq!(p.total().physics_steps, env.sim.physics_steps());
+        assert!(p.phases().iter().all(|(_, ph)| ph.wall_s > 0.0), "{p:?}");
+        // A baseline: its closing and settle, then the lift.
+        let before = p;
+        env.run_baseline(false, 2).expect("baseline");
+        let b = env.phases().since(&before);
+        assert_eq!(b.policy.physics_steps, 0);
+        assert_eq!(
+            b.closing.physics_steps + b.lift.physics_steps,
+            env.sim.physics_steps()
+        );
+    }
 
     #[test]
     fn a_refused_scene_ends_as_a_reported_failure() {

@@ -21,6 +21,7 @@ pub mod closing;
 pub mod curriculum;
 pub mod grasp;
 pub mod obs;
+pub mod phases;
 pub mod randomize;
 pub mod reward;
 pub mod stream;
