@@ -27,6 +27,7 @@ use super::api::{Action, ActionSpec, Env, Step, StepInfo};
 pub use super::closing::closing_target;
 use super::closing::{ClosingPath, ClosingSpace};
 use super::curriculum::{Curriculum, CurriculumConfig};
+use super::object_curriculum::{ObjectCurriculum, ObjectCurriculumConfig};
 use super::obs::{FrameStack, Modality, ObsLayout};
 use super::phases::{Phase, PhaseTally};
 use super::randomize::Randomization;
@@ -86,6 +87,9 @@ pub struct EnvConfig {
     pub action: ActionConfig,
     /// Curriculum (eq. 6); each environment keeps its own window.
     pub curriculum: CurriculumConfig,
+    /// Object curriculum (beyond the paper, off by default): training objects drawn by
+    /// their recent failure rate ([`super::object_curriculum`]); evaluation turns it off.
+    pub object_curriculum: ObjectCurriculumConfig,
     /// Per-episode domain randomisation (off by default; evaluation turns it off).
     pub randomization: Randomization,
     /// The procedural stream's settings, used when training on `objects = "procedural"`.
@@ -109,6 +113,7 @@ impl Default for EnvConfig {
                 window: 20,
                 ..CurriculumConfig::default()
             },
+            object_curriculum: ObjectCurriculumConfig::default(),
             randomization: Randomization::default(),
             stream: StreamConfig::default(),
         }
@@ -177,6 +182,15 @@ impl EnvConfig {
         }
         if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {
             return bad("curriculum.fixed_rate", "must be in [0, 1]".into());
+        }
+        if self.object_curriculum.enabled {
+            if let Err((field, message)) = self.object_curriculum.validate() {
+                let field = match field {
+                    "window" => "object_curriculum.window",
+                    _ => "object_curriculum.floor",
+                };
+                return bad(field, message);
+            }
         }
         if let Err((field, message)) = self.randomization.validate() {
             return bad(field, message);
@@ -251,6 +265,8 @@ pub struct GraspEnv {
     layout: ObsLayout,
     stack: FrameStack,
     curriculum: Curriculum,
+    /// The object curriculum, when enabled for a set of more than one object.
+    object_curriculum: Option<ObjectCurriculum>,
     steps: usize,
     episode_return: f64,
     touched_in_stage1: bool,
@@ -286,6 +302,7 @@ impl GraspEnv {
         let finger_limits = robot.finger_limits();
         let (start, closed) = (posture.angles(), script::power_grasp());
         let path = ClosingPath::new(cfg.closing, &start, &closed, &synergy, &finger_limits);
+        let n_objects = objects.len();
         Ok(GraspEnv {
             start,
             closed,
@@ -303,6 +320,8 @@ impl GraspEnv {
             layout,
             stack,
             curriculum: Curriculum::new(cfg.curriculum.clone()),
+            object_curriculum: (cfg.object_curriculum.enabled && n_objects > 1)
+                .then(|| ObjectCurriculum::new(cfg.object_curriculum.clone(), n_objects)),
             cfg,
             steps: 0,
             episode_return: 0.0,
@@ -319,6 +338,8 @@ impl GraspEnv {
     /// [`super::stream`]) instead of drawing from its object set.
     pub fn with_stream(mut self) -> Self {
         self.stream = Some(ObjectStream::new(self.cfg.stream.clone()));
+        // One stream object at a time: nothing to choose between.
+        self.object_curriculum = None;
         self
     }
 
@@ -399,7 +420,10 @@ impl GraspEnv {
             self.objects = vec![next];
             self.current_object = None;
         }
-        let k = rng.random_range(0..self.objects.len());
+        let k = match &self.object_curriculum {
+            Some(c) if self.stream.is_none() => c.sample(&mut rng),
+            _ => rng.random_range(0..self.objects.len()),
+        };
         let p = self.curriculum.sample(&mut rng);
         let dr = &self.cfg.randomization;
         let randomized = if dr.enabled {
@@ -502,6 +526,9 @@ impl GraspEnv {
         let physics_failure = physics_failure || failure.is_some();
         if !physics_failure {
             self.curriculum.record(success);
+            if let Some(c) = self.object_curriculum.as_mut() {
+                c.record(self.episode_object, success);
+            }
         }
         self.last = Some(EpisodeSummary {
             object: self.objects[self.episode_object].0.clone(),
@@ -845,6 +872,60 @@ mod tests {
             b.closing.physics_steps + b.lift.physics_steps,
             env.sim.physics_steps()
         );
+    }
+
+    #[test]
+    fn the_object_curriculum_draws_the_failing_object_more_often() {
+        let robot = Robot::builtin(Side::Left);
+        let objects = vec![
+            ("box".to_string(), ObjectSpec::default_box()),
+            ("cylinder".to_string(), ObjectSpec::default_cylinder()),
+        ];
+        let mut cfg = EnvConfig::default();
+        cfg.object_curriculum.enabled = true;
+        let model = crate::synergy::default_model();
+        let mut env = GraspEnv::new(
+            &robot,
+            objects.clone(),
+            model.clone(),
+            SimConfig::default(),
+            cfg.clone(),
+        )
+        .expect("env");
+        let c = env
+            .object_curriculum
+            .as_mut()
+            .expect("enabled for two objects");
+        for _ in 0..8 {
+            c.record(0, true);
+            c.record(1, false);
+        }
+        // Weights 0.1 + 1/10 and 0.1 + 9/10: the cylinder in 5 of 6 draws.
+        let n = 600;
+        let mut cylinder = 0;
+        for seed in 0..n {
+            env.reset_scene(seed).unwrap();
+            cylinder += usize::from(env.episode_object == 1);
+        }
+        let share = cylinder as f64 / n as f64;
+        assert!((share - 1.0 / 1.2).abs() < 0.05, "{share}");
+        // One object: nothing to choose, the draw is the paper's.
+        cfg.object_curriculum.enabled = true;
+        let one = GraspEnv::new(
+            &robot,
+            objects[..1].to_vec(),
+            model,
+            SimConfig::default(),
+            cfg.clone(),
+        )
+        .expect("env");
+        assert!(one.object_curriculum.is_none());
+        cfg.object_curriculum.window = 0;
+        assert!(cfg
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("object_curriculum.window"));
     }
 
     #[test]

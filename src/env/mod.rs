@@ -20,6 +20,7 @@ pub mod cartpole;
 pub mod closing;
 pub mod curriculum;
 pub mod grasp;
+pub mod object_curriculum;
 pub mod obs;
 pub mod phases;
 pub mod randomize;

@@ -640,8 +640,10 @@ pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError
     }
     let synergy = dir.join(files::SYNERGY);
     let mut env = cfg.env.grasp;
-    // Every agent is judged on the same, unrandomised objects and sensors.
+    // Every agent is judged on the same, unrandomised objects and sensors, each object
+    // in turn.
     env.randomization.enabled = false;
+    env.object_curriculum.enabled = false;
     Ok(Some(CheckpointSetup {
         env,
         n_components: cfg.n_components,

@@ -31,6 +31,7 @@ use crate::env::action::ActionConfig;
 use crate::env::closing::ClosingSpace;
 use crate::env::curriculum::CurriculumConfig;
 use crate::env::grasp::{AtMaxSteps, EnvConfig};
+use crate::env::object_curriculum::ObjectCurriculumConfig;
 use crate::env::obs::Modality;
 use crate::env::randomize::Randomization;
 use crate::env::stream::StreamConfig;
@@ -132,6 +133,7 @@ struct EnvSection {
     at_max_steps: Option<AtMaxSteps>,
     action: Option<ActionConfig>,
     curriculum: Option<CurriculumConfig>,
+    object_curriculum: Option<ObjectCurriculumConfig>,
     randomization: Option<Randomization>,
     stream: Option<StreamConfig>,
 }
@@ -317,6 +319,7 @@ impl TrainConfig {
             at_max_steps: e.at_max_steps.unwrap_or(d.at_max_steps),
             action: e.action.unwrap_or(d.action),
             curriculum: e.curriculum.unwrap_or(d.curriculum),
+            object_curriculum: e.object_curriculum.unwrap_or(d.object_curriculum),
             randomization: e.randomization.unwrap_or(d.randomization),
             stream: e.stream.unwrap_or(d.stream),
         };
@@ -656,6 +659,29 @@ mod tests {
         let d = TrainConfig::parse(Path::new("config.toml"), &text).unwrap();
         assert_eq!(c, d);
         assert_eq!(d.env.kind, EnvKind::Cartpole);
+    }
+
+    #[test]
+    fn object_curriculum_section_is_read_and_checked() {
+        let c = TrainConfig::parse(
+            Path::new("o.toml"),
+            "[env.object_curriculum]\nenabled = true\nwindow = 4\n",
+        )
+        .unwrap();
+        let oc = &c.env.grasp.object_curriculum;
+        assert!(oc.enabled && oc.window == 4 && oc.floor == 0.1);
+        let text = c.to_toml_string().unwrap();
+        assert_eq!(TrainConfig::parse(Path::new("c.toml"), &text).unwrap(), c);
+        let e = TrainConfig::parse(
+            Path::new("o.toml"),
+            "[env.object_curriculum]\nenabled = true\nfloor = -1.0\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("o.toml") && e.contains("object_curriculum.floor"),
+            "{e}"
+        );
     }
 
     #[test]
