@@ -230,6 +230,9 @@ pub struct EpisodeSummary {
     /// The deepest penetration of the object by the hand or the table during the
     /// episode (m; 0 when nothing penetrated), failures below the threshold included.
     pub deepest_contact: f64,
+    /// What the object touched in that deepest contact (a hand link or `table`; `None`
+    /// when nothing penetrated).
+    pub deepest_contact_with: Option<String>,
     /// Stage 1 ended on a fingertip contact (false: trajectory T ended first).
     pub touched_in_stage1: bool,
     /// The thumb's tactile bit when the lift began (false when the episode did not lift).
@@ -539,6 +542,7 @@ impl GraspEnv {
             physics_failure,
             failure,
             deepest_contact: self.sim.deepest_contact().map_or(0.0, |c| c.depth),
+            deepest_contact_with: self.sim.deepest_contact().map(|c| c.with.clone()),
             touched_in_stage1: self.touched_in_stage1,
             thumb_contact_at_lift: self.lift_grip.is_some_and(|g| g.0),
             grip_effort: self.lift_grip.map_or(0.0, |g| g.1),

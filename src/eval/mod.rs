@@ -210,6 +210,11 @@ pub struct ObjectResult {
     /// (empty in evaluations saved before it was recorded).
     #[serde(default)]
     pub deepest_contacts: Vec<f64>,
+    /// What the object touched in each trial's deepest contact (a hand link or `table`;
+    /// empty when nothing penetrated), in trial order (empty in evaluations saved before
+    /// it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub deepest_contacts_with: Vec<String>,
     /// The physics failures, each with its trial, kind, body pair, depth and step.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub failures: Vec<TrialFailure>,
@@ -261,6 +266,22 @@ impl ContactStats {
     }
 }
 
+/// The trials whose deepest contact was over 1 cm, by what the object touched
+/// (`unknown` for trials saved without it).
+pub fn over_1cm_by_body(objects: &[ObjectResult]) -> BTreeMap<String, usize> {
+    let mut m = BTreeMap::new();
+    for o in objects {
+        for (t, d) in o.deepest_contacts.iter().enumerate() {
+            if *d > 0.01 {
+                let with = o.deepest_contacts_with.get(t).filter(|w| !w.is_empty());
+                *m.entry(with.map_or("unknown".to_string(), String::clone))
+                    .or_insert(0) += 1;
+            }
+        }
+    }
+    m
+}
+
 /// All results of one agent.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AgentResult {
@@ -288,6 +309,9 @@ pub struct AgentResult {
     /// Each episode's deepest object contact, over all episodes.
     #[serde(default)]
     pub deepest_contact: ContactStats,
+    /// The episodes whose deepest contact was over 1 cm, by what the object touched.
+    #[serde(default)]
+    pub over_1cm_by_body: BTreeMap<String, usize>,
     /// How the lifts were made: thumb contact and grip, over every episode that lifted.
     pub lifts: LiftStats,
     /// Wall time (s).
@@ -390,12 +414,16 @@ pub fn physics_line(r: &AgentResult) -> String {
     let c = &r.deepest_contact;
     s.push_str(&format!(
         "; deepest object contact per episode: median {:.1} mm, 99th percentile {:.1} mm, \
-         max {:.1} mm, {} over 1 cm\n",
+         max {:.1} mm, {} over 1 cm",
         c.median * 1e3,
         c.p99 * 1e3,
         c.max * 1e3,
         c.over_1cm
     ));
+    if !r.over_1cm_by_body.is_empty() {
+        s.push_str(&format!(" ({})", tally(&r.over_1cm_by_body)));
+    }
+    s.push('\n');
     s
 }
 
@@ -505,6 +533,10 @@ pub fn evaluate(
             physics_failures: eps.iter().filter(|e| e.physics_failure).count(),
             outcomes: eps.iter().map(|e| e.success).collect(),
             deepest_contacts: eps.iter().map(|e| e.deepest_contact).collect(),
+            deepest_contacts_with: eps
+                .iter()
+                .map(|e| e.deepest_contact_with.clone().unwrap_or_default())
+                .collect(),
             failures: eps
                 .iter()
                 .enumerate()
@@ -535,6 +567,7 @@ pub fn evaluate(
         failures_by_kind,
         penetrations_by_body,
         deepest_contact: ContactStats::of(&depths),
+        over_1cm_by_body: over_1cm_by_body(&objects),
         lifts,
         agent: label,
         mean_rate,
@@ -733,6 +766,7 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         let n_all: usize = r.objects.iter().map(|o| o.trials).sum();
         r.mean_rate = r.objects.iter().map(|o| o.rate).sum::<f64>() / r.objects.len().max(1) as f64;
         r.ci95 = wilson(k_all, n_all);
+        r.over_1cm_by_body = over_1cm_by_body(&r.objects);
     }
     let first: Vec<&str> = results[0]
         .objects
@@ -872,6 +906,7 @@ mod tests {
             physics_failure: false,
             failure: None,
             deepest_contact: 0.0,
+            deepest_contact_with: None,
             touched_in_stage1: true,
             thumb_contact_at_lift: thumb,
             grip_effort: grip,
@@ -915,6 +950,7 @@ mod tests {
                 physics_failures: 0,
                 outcomes: vec![true; 8].into_iter().chain([false; 2]).collect(),
                 deepest_contacts: vec![0.0; 10],
+                deepest_contacts_with: Vec::new(),
                 failures: Vec::new(),
             }],
             mean_rate: 0.8,
@@ -925,6 +961,7 @@ mod tests {
             failures_by_kind: BTreeMap::new(),
             penetrations_by_body: BTreeMap::new(),
             deepest_contact: ContactStats::default(),
+            over_1cm_by_body: Default::default(),
             lifts: LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),
@@ -960,6 +997,9 @@ mod tests {
                 physics_failures: 1,
                 outcomes: vec![true, false, true, true],
                 deepest_contacts: vec![0.001, 0.03, 0.0, 0.002],
+                deepest_contacts_with: ["table", "lh_ffdistal", "", "lh_thdistal"]
+                    .map(String::from)
+                    .to_vec(),
                 failures: vec![TrialFailure {
                     trial: 1,
                     report: Some(FailureReport {
@@ -980,10 +1020,14 @@ mod tests {
             failures_by_kind: [("deep_penetration".to_string(), 1)].into(),
             penetrations_by_body: [("lh_ffdistal".to_string(), 1)].into(),
             deepest_contact: ContactStats::of(&[0.001, 0.03, 0.0, 0.002]),
+            over_1cm_by_body: [("lh_ffdistal".to_string(), 1)].into(),
             lifts: LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),
         };
+        assert_eq!(over_1cm_by_body(&r.objects), r.over_1cm_by_body);
+        let line = physics_line(&r);
+        assert!(line.contains("1 over 1 cm (lh_ffdistal 1)"), "{line}");
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("eval.json");
         let write = |rs: &[AgentResult]| {
@@ -991,6 +1035,15 @@ mod tests {
         };
         write(std::slice::from_ref(&r));
         assert_eq!(read_results(&path).unwrap(), vec![r.clone()]);
+        // Saved before the bodies were recorded: counted as unknown.
+        let mut legacy = r.clone();
+        legacy.objects[0].deepest_contacts_with.clear();
+        write(&[legacy]);
+        let back = read_results(&path).unwrap();
+        assert_eq!(
+            back[0].over_1cm_by_body,
+            [("unknown".to_string(), 1)].into()
+        );
         // Counts that contradict the outcomes.
         let mut bad = r.clone();
         bad.objects[0].successes = 4;

@@ -147,6 +147,7 @@ mod tests {
                     physics_failures: 0,
                     outcomes: o.to_vec(),
                     deepest_contacts: vec![0.0; o.len()],
+                    deepest_contacts_with: Vec::new(),
                     failures: Vec::new(),
                 }
             })
@@ -162,6 +163,7 @@ mod tests {
             failures_by_kind: Default::default(),
             penetrations_by_body: Default::default(),
             deepest_contact: Default::default(),
+            over_1cm_by_body: Default::default(),
             lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),

@@ -322,6 +322,7 @@ mod tests {
                 physics_failures: 0,
                 outcomes: (0..trials).map(|t| t < k).collect(),
                 deepest_contacts: vec![0.0; trials],
+                deepest_contacts_with: Vec::new(),
                 failures: Vec::new(),
             })
             .collect();
@@ -338,6 +339,7 @@ mod tests {
             failures_by_kind: Default::default(),
             penetrations_by_body: Default::default(),
             deepest_contact: Default::default(),
+            over_1cm_by_body: Default::default(),
             lifts: LiftStats::default(),
             wall_s: 1.0,
             recordings: Vec::new(),
