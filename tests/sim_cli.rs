@@ -172,8 +172,7 @@ fn a_full_effort_squeeze_stays_within_a_few_millimetres_of_the_surface() {
 
 #[test]
 fn bench_env_splits_the_episodes_into_phases() {
-    let (ok, out, err) = grasp(&[
-        "--json",
+    let args = [
         "bench",
         "env",
         "--envs",
@@ -182,7 +181,8 @@ fn bench_env_splits_the_episodes_into_phases() {
         "1",
         "--seconds",
         "2",
-    ]);
+    ];
+    let (ok, out, err) = grasp(&[&["--json"][..], &args].concat());
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let p = &v["phases"];
@@ -192,16 +192,7 @@ fn bench_env_splits_the_episodes_into_phases() {
     }
     assert!(p["closing"]["physics_steps"].as_u64().unwrap() > 0, "{p}");
     assert_eq!(p["reset"]["physics_steps"], 0, "{p}");
-    let (ok, out, err) = grasp(&[
-        "bench",
-        "env",
-        "--envs",
-        "2",
-        "--threads",
-        "1",
-        "--seconds",
-        "2",
-    ]);
+    let (ok, out, err) = grasp(&args);
     assert!(ok, "{err}");
     assert!(out.contains("physics steps per episode"), "{out}");
 }

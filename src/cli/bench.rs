@@ -446,10 +446,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
                 "episodes": r.iter().map(|f| f.episodes).sum::<u64>(),
                 "physics_failures": r.iter().map(|f| f.physics_failures).sum::<u64>(),
                 "wall_s": r.iter().map(|f| f.wall_s).sum::<f64>(),
-                "phases": r
-                    .iter()
-                    .filter_map(|f| f.phases)
-                    .reduce(|a, b| a.plus(&b)),
+                "phases": summed_phases(r),
                 "runs": r,
             })
         })
@@ -495,14 +492,17 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     Ok(())
 }
 
+/// The phase tallies of one config's rounds, summed (`None` without grasping envs).
+fn summed_phases(runs: &[grasp::env::bench::EnvFigures]) -> Option<grasp::env::phases::PhaseTally> {
+    runs.iter()
+        .filter_map(|f| f.phases)
+        .reduce(|a, b| a.plus(&b))
+}
+
 /// The phase split of one config's rounds: per phase the physics steps per episode and
 /// the share of the physics steps and of the environments' time.
 fn print_phases(runs: &[grasp::env::bench::EnvFigures]) {
-    let Some(t) = runs
-        .iter()
-        .filter_map(|f| f.phases)
-        .reduce(|a, b| a.plus(&b))
-    else {
+    let Some(t) = summed_phases(runs) else {
         return;
     };
     let episodes = runs.iter().map(|f| f.episodes).sum::<u64>().max(1) as f64;

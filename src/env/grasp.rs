@@ -185,10 +185,6 @@ impl EnvConfig {
         }
         if self.object_curriculum.enabled {
             if let Err((field, message)) = self.object_curriculum.validate() {
-                let field = match field {
-                    "window" => "object_curriculum.window",
-                    _ => "object_curriculum.floor",
-                };
                 return bad(field, message);
             }
         }
@@ -411,11 +407,6 @@ impl GraspEnv {
         r
     }
 
-    /// The physics steps of the current episode so far.
-    fn physics_steps(&self) -> u64 {
-        self.sim.physics_steps()
-    }
-
     /// [`GraspEnv::reset_scene`] with the hand in posture `start`.
     fn reset_scene_from(&mut self, seed: u64, start: [f64; 24]) -> Result<(), SimError> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -568,9 +559,9 @@ impl GraspEnv {
     /// through it kept for the episode's summary.
     fn lift_and_judge(&mut self) -> LiftOutcome {
         let thumb = self.sim.sensors().tactile[4] == 1;
-        let (t, before) = (Instant::now(), self.physics_steps());
+        let (t, before) = (Instant::now(), self.sim.physics_steps());
         let out = self.sim.lift_and_judge();
-        self.phases.lift.add(self.physics_steps() - before, t);
+        self.phases.lift.add(self.sim.physics_steps() - before, t);
         self.lift_grip = Some((thumb, out.grip_effort));
         out
     }
@@ -650,7 +641,7 @@ impl GraspEnv {
                 }
             }
         }
-        self.phases.closing.add(self.physics_steps(), t);
+        self.phases.closing.add(self.sim.physics_steps(), t);
         if !ok {
             self.finish(false, false, true);
         } else {
@@ -694,9 +685,11 @@ impl Env for GraspEnv {
             self.done = false;
             return self.stack.stacked();
         }
-        let (t, before) = (Instant::now(), self.physics_steps());
+        let (t, before) = (Instant::now(), self.sim.physics_steps());
         self.touched_in_stage1 = self.stage1();
-        self.phases.closing.add(self.physics_steps() - before, t);
+        self.phases
+            .closing
+            .add(self.sim.physics_steps() - before, t);
         let zero = vec![0.0; self.synergy.n_components() + 2];
         self.push_frame(&zero);
         self.stack.stacked()
@@ -709,11 +702,11 @@ impl Env for GraspEnv {
         if a.lift {
             return self.lift();
         }
-        let (t, before, lift0) = (Instant::now(), self.physics_steps(), self.phases.lift);
+        let (t, before, lift0) = (Instant::now(), self.sim.physics_steps(), self.phases.lift);
         let step = self.policy_step(a);
         // A step at the step cap may end in the lift, which counts as its own phase.
         let mut spent = Phase::default();
-        spent.add(self.physics_steps() - before, t);
+        spent.add(self.sim.physics_steps() - before, t);
         self.phases.policy = self
             .phases
             .policy

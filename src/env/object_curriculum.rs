@@ -38,16 +38,20 @@ impl Default for ObjectCurriculumConfig {
 pub const MAX_OBJECT_WINDOW: usize = 10_000;
 
 impl ObjectCurriculumConfig {
-    /// Checks the values; `Err` names the field (relative to `[env.object_curriculum]`).
+    /// Checks the values; `Err` names the field relative to `[env]`, as
+    /// [`super::randomize::Randomization::validate`] does (`object_curriculum.window`).
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         if !(1..=MAX_OBJECT_WINDOW).contains(&self.window) {
             return Err((
-                "window",
+                "object_curriculum.window",
                 format!("{} must be in 1..={MAX_OBJECT_WINDOW}", self.window),
             ));
         }
         if !(self.floor > 0.0 && self.floor <= 10.0) {
-            return Err(("floor", format!("{} must be in (0, 10]", self.floor)));
+            return Err((
+                "object_curriculum.floor",
+                format!("{} must be in (0, 10]", self.floor),
+            ));
         }
         Ok(())
     }
@@ -159,9 +163,18 @@ mod tests {
 
     #[test]
     fn bad_settings_are_named() {
-        assert_eq!(cfg(0, 0.1).validate().unwrap_err().0, "window");
-        assert_eq!(cfg(4, 0.0).validate().unwrap_err().0, "floor");
-        assert_eq!(cfg(4, f64::NAN).validate().unwrap_err().0, "floor");
+        assert_eq!(
+            cfg(0, 0.1).validate().unwrap_err().0,
+            "object_curriculum.window"
+        );
+        assert_eq!(
+            cfg(4, 0.0).validate().unwrap_err().0,
+            "object_curriculum.floor"
+        );
+        assert_eq!(
+            cfg(4, f64::NAN).validate().unwrap_err().0,
+            "object_curriculum.floor"
+        );
         assert!(ObjectCurriculumConfig::default().validate().is_ok());
     }
 }

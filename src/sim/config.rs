@@ -354,15 +354,13 @@ impl SimConfig {
         if !(MIN_DT..=0.05).contains(&self.dt) {
             return Err(bad("dt", self.dt, "must be in [1e-4, 0.05] s"));
         }
-        if !(1..=64).contains(&self.substeps) {
-            return Err(bad("substeps", self.substeps as f64, "must be in 1..=64"));
-        }
-        if !(1..=64).contains(&self.pgs_iterations) {
-            return Err(bad(
-                "pgs_iterations",
-                self.pgs_iterations as f64,
-                "must be in 1..=64",
-            ));
+        for (field, n) in [
+            ("substeps", self.substeps),
+            ("pgs_iterations", self.pgs_iterations),
+        ] {
+            if !(1..=64).contains(&n) {
+                return Err(bad(field, n as f64, "must be in 1..=64"));
+            }
         }
         if self.ccd_substeps > 16 {
             return Err(bad(

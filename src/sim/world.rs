@@ -1499,18 +1499,23 @@ mod tests {
         assert_send::<HandSim>();
     }
 
-    #[test]
-    fn contact_force_of_a_resting_object_is_its_weight() {
-        // The force calibration behind the tactile threshold: impulse / dt = m g.
+    /// A 0.5 kg box resting on the table for 60 steps, the hand far above it.
+    fn resting_box() -> HandSim {
         let robot = Robot::builtin(Side::Left);
         let obj = ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.8);
         let mut sim = HandSim::new(&robot, obj.clone(), SimConfig::default()).unwrap();
-        // Hand far above the object.
         sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.3, 0.0))
             .unwrap();
         for _ in 0..60 {
             assert!(sim.step_physics());
         }
+        sim
+    }
+
+    #[test]
+    fn contact_force_of_a_resting_object_is_its_weight() {
+        // The force calibration behind the tactile threshold: impulse / dt = m g.
+        let sim = resting_box();
         let f = sim.pair_force(sim.table, sim.object_collider);
         assert!((f - 0.5 * 9.81).abs() < 0.05 * 4.905, "table force {f}");
         assert_eq!(sim.hand_object_force(), 0.0);
@@ -1521,14 +1526,7 @@ mod tests {
         // rapier recycles the contacts of a pair that barely moved: their points keep the
         // separations of the step they were computed in. A resting box whose contacts were
         // computed at rest, then found 4 mm into the table, is 4 mm deep.
-        let robot = Robot::builtin(Side::Left);
-        let obj = ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.8);
-        let mut sim = HandSim::new(&robot, obj.clone(), SimConfig::default()).unwrap();
-        sim.reset(&Scene::above(&obj, Posture::Open.angles(), 0.3, 0.0))
-            .unwrap();
-        for _ in 0..60 {
-            assert!(sim.step_physics());
-        }
+        let mut sim = resting_box();
         let rest = sim.deepest_object_contact().map_or(0.0, |c| c.depth);
         assert!(rest < 1e-3, "resting box {rest} m deep");
         let co = &mut sim.sets.colliders[sim.object_collider];
