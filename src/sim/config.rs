@@ -166,9 +166,10 @@ pub struct ContactConfig {
     /// Damping ratio of contacts with a fixed body; rapier's default is 10.
     #[serde(default = "default_contact_damping")]
     pub static_damping_ratio: f64,
-    /// Check every penetrating contact normal that parry's GJK/EPA returns against the
-    /// shapes' geometry and compute a wrong one again ([`crate::sim::contact`]); off
-    /// (parry's contacts as they are) when absent.
+    /// Check every contact manifold that parry's GJK/EPA returns against the shapes'
+    /// geometry and compute a wrong one again, and compute the fingertips' (balls')
+    /// contacts with convex hulls exactly ([`crate::sim::contact`]); off (parry's contacts
+    /// as they are) when absent.
     #[serde(default)]
     pub check_normals: bool,
     /// rapier's contact recycling (m): a colliding pair whose relative pose drifted less
