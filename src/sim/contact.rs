@@ -276,35 +276,26 @@ enum BallSide {
 /// onto the face's plane when that falls within the face, else the nearest point of the
 /// face's border. (parry's point projection runs GJK, which was traced returning a
 /// fingertip centre 14 mm from an apple hull whose nearest vertex was 4 mm away.)
-pub fn point_hull_distance(hull: &ConvexPolyhedron, c: Vector) -> (Real, Vector, Vector) {
+fn point_hull_distance(hull: &ConvexPolyhedron, c: Vector) -> (Real, Vector, Vector) {
     let points = hull.points();
     let adj = hull.vertices_adj_to_face();
-    let plane = |normal: Vector, first: u32| normal.dot(c - points[adj[first as usize] as usize]);
-    let (deepest, n) = hull
-        .faces()
-        .iter()
-        .map(|f| (plane(f.normal, f.first_vertex_or_edge), f.normal))
-        .fold((Real::NEG_INFINITY, Vector::Z), |a, b| {
-            if b.0 > a.0 {
-                b
-            } else {
-                a
-            }
-        });
-    if deepest <= 0.0 {
-        return (deepest, n, c - n * deepest);
-    }
-    // Outside: the nearest point over the faces the point is in front of. A face's plane
-    // distance bounds its points' distance from below, so farther faces are skipped.
-    let mut best = (Real::MAX, c - n * deepest);
+    // One pass over the faces: the deepest face plane (the answer inside) and, over the
+    // faces the point is in front of, the nearest face point (the answer outside). A
+    // face's plane distance bounds its points' distance from below, so faces no nearer
+    // than the best so far are skipped.
+    let (mut deepest, mut n) = (Real::NEG_INFINITY, Vector::Z);
+    let mut best = (Real::MAX, c);
     for f in hull.faces() {
-        let s = plane(f.normal, f.first_vertex_or_edge);
+        let first = f.first_vertex_or_edge as usize;
+        let ids = &adj[first..first + f.num_vertices_or_edges as usize];
+        let s = f.normal.dot(c - points[ids[0] as usize]);
+        if s > deepest {
+            (deepest, n) = (s, f.normal);
+        }
         if s <= 0.0 || s >= best.0 {
             continue;
         }
         let p = c - f.normal * s;
-        let first = f.first_vertex_or_edge as usize;
-        let ids = &adj[first..first + f.num_vertices_or_edges as usize];
         let mut inside = true;
         let mut nearest = (Real::MAX, p);
         for (k, &i) in ids.iter().enumerate() {
@@ -325,6 +316,9 @@ pub fn point_hull_distance(hull: &ConvexPolyhedron, c: Vector) -> (Real, Vector,
         if candidate.0 < best.0 {
             best = candidate;
         }
+    }
+    if deepest <= 0.0 {
+        return (deepest, n, c - n * deepest);
     }
     let (dist, on_hull) = best;
     let normal = (c - on_hull).try_normalize().unwrap_or(n);
@@ -725,6 +719,14 @@ mod tests {
         (hull, queries)
     }
 
+    /// The distance from `c` to the hull's nearest vertex.
+    fn nearest_vertex(hull: &ConvexPolyhedron, c: Vector) -> Real {
+        hull.points()
+            .iter()
+            .map(|v| (c - *v).length())
+            .fold(Real::MAX, Real::min)
+    }
+
     #[test]
     fn point_hull_distance_is_bracketed_by_the_faces_and_the_vertices() {
         // Outside a convex hull, a point is no nearer than its farthest face plane and no
@@ -742,11 +744,7 @@ mod tests {
                     f.normal.dot(c - v)
                 })
                 .fold(Real::NEG_INFINITY, Real::max);
-            let vertex = hull
-                .points()
-                .iter()
-                .map(|v| (c - *v).length())
-                .fold(Real::MAX, Real::min);
+            let vertex = nearest_vertex(&hull, c);
             if plane > 0.0 {
                 outside += 1;
                 assert!(
@@ -772,11 +770,7 @@ mod tests {
             .iter()
             .map(|&c| {
                 let proj = hull.project_local_point(c, true);
-                let vertex = hull
-                    .points()
-                    .iter()
-                    .map(|v| (c - *v).length())
-                    .fold(Real::MAX, Real::min);
+                let vertex = nearest_vertex(&hull, c);
                 (c - proj.point).length() - vertex
             })
             .fold(Real::NEG_INFINITY, Real::max);
