@@ -74,17 +74,20 @@ fn rest(sim: &mut HandSim, obj: &ObjectSpec, seconds: f64) -> Rest {
 }
 
 /// Every built-in object, placed in its library pose (turned onto a stable face by
-/// `objects::rest`), stays where it was put for 2 s: no physics failure, less than 5 mm
+/// `objects::rest`), stays where it was put for 3 s: no physics failure, less than 5 mm
 /// and 0.15 rad from its start (a tessellated rounded base may settle by a few degrees
 /// onto a neighbouring facet: measured at most 0.72 mm and 0.064 rad, egad_c0_d4), and at
 /// rest over the last second (less than 0.5 mm and 0.01 rad: no creeping, no rocking).
+/// With the 1 cm contact recycling window settling can take two seconds: egad_c2_d3 moved
+/// 0.56 mm and 0.025 rad in the first second, 0.67 mm and 0.017 rad in the second, then
+/// under 0.01 mm and 0.0001 rad (with rapier's 5 cm window 0.17 mm and 0.008 rad, then 0).
 #[test]
 fn every_builtin_object_rests_stably_on_the_table() {
     let objs = specs("all");
     assert_eq!(objs.len(), 80);
     let results: Vec<Rest> = objs
         .par_iter()
-        .map_init(|| new_sim(&objs[0]), |sim, o| rest(sim, o, 2.0))
+        .map_init(|| new_sim(&objs[0]), |sim, o| rest(sim, o, 3.0))
         .collect();
     let mut bad = Vec::new();
     for r in &results {
