@@ -124,30 +124,41 @@ fn bench_regression_rejects_a_bad_reference_before_measuring() {
     );
 }
 
-/// Baseline 1's median deepest object contact (m) on egad_u3_c3_d4, 10 trials, seed 0, in
-/// the given simulator config (the built-in one when `None`).
-fn squeeze_depth(cfg: Option<&std::path::Path>) -> f64 {
+/// `grasp --seed 0 --json eval --policy baseline1` on one object, in the built-in simulator
+/// config, or (`edit`: a line of configs/sim.toml and its replacement) in a copy of it with
+/// that line changed. The parsed JSON.
+fn baseline1_eval(object: &str, trials: &str, edit: Option<(&str, &str)>) -> serde_json::Value {
+    let dir = tempfile::tempdir().unwrap();
     let mut args = vec![
-        "-q",
-        "--seed",
-        "0",
-        "--json",
-        "eval",
-        "--policy",
-        "baseline1",
-        "--objects",
-        "egad_u3_c3_d4",
-        "--trials",
-        "10",
+        "-q".to_string(),
+        "--seed".into(),
+        "0".into(),
+        "--json".into(),
+        "eval".into(),
+        "--policy".into(),
+        "baseline1".into(),
+        "--objects".into(),
+        object.into(),
+        "--trials".into(),
+        trials.into(),
     ];
-    let path;
-    if let Some(p) = cfg {
-        path = p.display().to_string();
-        args.extend(["--sim-config", &path]);
+    if let Some((line, replacement)) = edit {
+        let text = std::fs::read_to_string("configs/sim.toml").unwrap();
+        assert!(text.contains(line), "configs/sim.toml has no `{line}`");
+        let cfg = dir.path().join("sim.toml");
+        std::fs::write(&cfg, text.replace(line, replacement)).unwrap();
+        args.extend(["--sim-config".into(), cfg.display().to_string()]);
     }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let (ok, out, err) = grasp(&args);
     assert!(ok, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    serde_json::from_str(&out).unwrap()
+}
+
+/// Baseline 1's median deepest object contact (m) on egad_u3_c3_d4, 10 trials, seed 0
+/// (see [`baseline1_eval`] for `edit`).
+fn squeeze_depth(edit: Option<(&str, &str)>) -> f64 {
+    let v = baseline1_eval("egad_u3_c3_d4", "10", edit);
     v[0]["deepest_contact"]["median"].as_f64().unwrap()
 }
 
@@ -159,15 +170,7 @@ fn a_full_effort_squeeze_stays_within_a_few_millimetres_of_the_surface() {
     // the fingertips' contacts were exact); with configs/sim.toml's 4 iterations it is
     // 1.8 mm (4.7 mm before the exact fingertips).
     let built_in = squeeze_depth(None);
-    let dir = std::env::temp_dir().join(format!("grasp-pgs-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let one = dir.join("pgs1.toml");
-    let text = std::fs::read_to_string("configs/sim.toml")
-        .unwrap()
-        .replace("pgs_iterations = 4", "pgs_iterations = 1");
-    std::fs::write(&one, text).unwrap();
-    let unconverged = squeeze_depth(Some(&one));
-    std::fs::remove_dir_all(&dir).ok();
+    let unconverged = squeeze_depth(Some(("pgs_iterations = 4", "pgs_iterations = 1")));
     assert!(built_in < 0.0025, "median deepest contact {built_in}");
     assert!(unconverged > 0.003, "one iteration: median {unconverged}");
 }
@@ -190,41 +193,10 @@ fn a_fingertip_rolling_on_the_apple_stays_on_its_surface() {
     assert!(v["failure"].is_null(), "{}", v["failure"]);
 }
 
-/// Baseline 1's deepest object contact per episode (m) on egad_c2_d1, 4 trials, seed 0,
-/// with the built-in simulator config whose contact recycling window is `recycle` (m).
-fn recycled_depths(recycle: Option<&str>) -> Vec<f64> {
-    let dir = std::env::temp_dir().join(format!("grasp-recycle-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let cfg = dir.join(format!("recycle-{}.toml", recycle.unwrap_or("built-in")));
-    let text = std::fs::read_to_string("configs/sim.toml").unwrap();
-    let text = match recycle {
-        Some(r) => text.replace(
-            "recycle_distance = 0.01",
-            &format!("recycle_distance = {r}"),
-        ),
-        None => text,
-    };
-    std::fs::write(&cfg, text).unwrap();
-    let path = cfg.display().to_string();
-    let args = [
-        "-q",
-        "--seed",
-        "0",
-        "--json",
-        "eval",
-        "--policy",
-        "baseline1",
-        "--objects",
-        "egad_c2_d1",
-        "--trials",
-        "4",
-        "--sim-config",
-        &path,
-    ];
-    let (ok, out, err) = grasp(&args);
-    std::fs::remove_file(&cfg).ok();
-    assert!(ok, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+/// Baseline 1's deepest object contact per episode (m) on egad_c2_d1, 4 trials, seed 0
+/// (see [`baseline1_eval`] for `edit`).
+fn recycled_depths(edit: Option<(&str, &str)>) -> Vec<f64> {
+    let v = baseline1_eval("egad_c2_d1", "4", edit);
     v[0]["objects"][0]["deepest_contacts"]
         .as_array()
         .unwrap()
@@ -240,7 +212,8 @@ fn a_phalanx_sliding_over_an_object_keeps_no_stale_contact_a_centimetre_deep() {
     // the cylinder never overlapped the object's hull; configs/sim.toml's 1 cm window
     // computes the contacts again sooner: 2.8 mm at most over the four trials.
     let built_in = recycled_depths(None);
-    let rapier_default = recycled_depths(Some("0.05"));
+    let rapier_default =
+        recycled_depths(Some(("recycle_distance = 0.01", "recycle_distance = 0.05")));
     let deepest = |d: &[f64]| d.iter().copied().fold(0.0, f64::max);
     assert_eq!(built_in.len(), 4);
     assert!(deepest(&built_in) < 0.005, "1 cm window: {built_in:?}");
