@@ -71,7 +71,7 @@ pub struct EvalArgs {
     /// config.toml: a different value is an error.
     #[arg(long)]
     pub components: Option<usize>,
-    /// Sensing modality M1, M2 or M3 (baselines; default M3). Checkpoints use the one in
+    /// Sensing modality M1, M2, M3 or M3G (baselines; default M3). Checkpoints use the one in
     /// their config.toml: a different value is an error.
     #[arg(long)]
     pub modality: Option<Modality>,

@@ -28,10 +28,10 @@ pub use super::closing::closing_target;
 use super::closing::{ClosingPath, ClosingSpace};
 use super::curriculum::{Curriculum, CurriculumConfig};
 use super::object_curriculum::{ObjectCurriculum, ObjectCurriculumConfig};
-use super::obs::{FrameStack, Modality, ObsLayout};
+use super::obs::{surface_vectors, FrameStack, Modality, ObsLayout, N_SURFACE};
 use super::phases::{Phase, PhaseTally};
 use super::randomize::Randomization;
-use super::reward;
+use super::reward::{self, RewardConfig};
 use super::stream::{ObjectStream, StreamConfig};
 use crate::robot::{Posture, Robot};
 use crate::sim::{
@@ -63,7 +63,7 @@ const CLEARANCE_STEPS: usize = 20;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EnvConfig {
-    /// Sensing modality (M1, M2, M3).
+    /// Sensing modality (M1, M2, M3; M3G beyond the paper).
     pub modality: Modality,
     /// Number of stacked observation frames `h`.
     pub history: usize,
@@ -94,6 +94,12 @@ pub struct EnvConfig {
     pub randomization: Randomization,
     /// The procedural stream's settings, used when training on `objects = "procedural"`.
     pub stream: StreamConfig,
+    /// Shaped reward terms beyond eq. 4-5 (all off by default).
+    pub reward: RewardConfig,
+    /// Asymmetric critic (beyond the paper, off by default): the observation ends with
+    /// [`super::obs::critic_state`], privileged simulator state that only the critic
+    /// reads; the actor keeps the modality's observation.
+    pub critic_state: bool,
 }
 
 impl Default for EnvConfig {
@@ -116,6 +122,8 @@ impl Default for EnvConfig {
             object_curriculum: ObjectCurriculumConfig::default(),
             randomization: Randomization::default(),
             stream: StreamConfig::default(),
+            reward: RewardConfig::default(),
+            critic_state: false,
         }
     }
 }
@@ -189,6 +197,9 @@ impl EnvConfig {
             }
         }
         if let Err((field, message)) = self.randomization.validate() {
+            return bad(field, message);
+        }
+        if let Err((field, message)) = self.reward.validate() {
             return bad(field, message);
         }
         if self.stream.reuse == 0 {
@@ -294,7 +305,8 @@ impl GraspEnv {
             .map(|o| o.1.clone())
             .ok_or(GraspEnvError::NoObjects)?;
         let sim = HandSim::new(robot, first, sim_cfg)?;
-        let layout = ObsLayout::new(cfg.modality, synergy.n_components(), cfg.history);
+        let layout = ObsLayout::new(cfg.modality, synergy.n_components(), cfg.history)
+            .with_critic_state(cfg.critic_state);
         let stack = FrameStack::new(&layout);
         let eps_std = component_std(&synergy);
         let limits = robot.hand_limits();
@@ -494,8 +506,36 @@ impl GraspEnv {
         false
     }
 
+    /// The policy's observation: the stacked frames, then the critic's privileged state
+    /// when the layout has one (zeros where the simulator has none, before a reset).
+    fn observation(&self) -> Vec<f32> {
+        let mut o = self.stack.stacked();
+        if self.layout.critic_state > 0 {
+            match self.sim.critic_geometry() {
+                Some(g) => {
+                    let obj = self.sim.object();
+                    o.extend(super::obs::critic_state(
+                        &g,
+                        &self.sim.tip_forces(),
+                        obj.mass,
+                        obj.friction,
+                    ))
+                }
+                None => o.extend(std::iter::repeat_n(0.0, self.layout.critic_state)),
+            }
+        }
+        o
+    }
+
     fn push_frame(&mut self, prev_action: &[f32]) {
         let s = self.sim.sensors();
+        let surface = if self.cfg.modality == Modality::M3G {
+            self.sim
+                .critic_geometry()
+                .map_or([0.0; N_SURFACE], |g| surface_vectors(&g))
+        } else {
+            [0.0; N_SURFACE]
+        };
         let tactile = s.tactile.map(|b| b == 1);
         let dr = &self.cfg.randomization;
         let frame = if dr.enabled {
@@ -507,10 +547,11 @@ impl GraspEnv {
                 &mut self.noise,
             );
             let q = dr.noisy_angles(&s.q, &mut self.noise);
-            self.layout.frame(prev_action, &tactile, &levels, &q)
+            self.layout
+                .frame(prev_action, &tactile, &levels, &q, &surface)
         } else {
             self.layout
-                .frame(prev_action, &tactile, &s.torque_level, &s.q)
+                .frame(prev_action, &tactile, &s.torque_level, &s.q, &surface)
         };
         self.stack.push(frame);
     }
@@ -544,7 +585,7 @@ impl GraspEnv {
     fn failed_step(&mut self) -> Step {
         self.finish(false, false, true);
         Step {
-            obs: self.stack.stacked(),
+            obs: self.observation(),
             reward: 0.0,
             terminated: true,
             truncated: false,
@@ -575,7 +616,7 @@ impl GraspEnv {
         self.steps += 1;
         self.finish(out.success, true, failure);
         Step {
-            obs: self.stack.stacked(),
+            obs: self.observation(),
             reward: r as f32,
             terminated: true,
             truncated: false,
@@ -683,7 +724,7 @@ impl Env for GraspEnv {
             self.touched_in_stage1 = false;
             self.lift_grip = None;
             self.done = false;
-            return self.stack.stacked();
+            return self.observation();
         }
         let (t, before) = (Instant::now(), self.sim.physics_steps());
         self.touched_in_stage1 = self.stage1();
@@ -692,7 +733,7 @@ impl Env for GraspEnv {
             .add(self.sim.physics_steps() - before, t);
         let zero = vec![0.0; self.synergy.n_components() + 2];
         self.push_frame(&zero);
-        self.stack.stacked()
+        self.observation()
     }
 
     fn step(&mut self, a: &Action) -> Step {
@@ -733,6 +774,7 @@ impl GraspEnv {
             &a.cont,
         );
         let target_f: [f64; 22] = std::array::from_fn(|k| targets[k + 2]);
+        let before = self.sim.object_position();
         if self.sim.set_targets(&targets).is_err() || !self.sim.step_control() {
             return self.failed_step();
         }
@@ -745,7 +787,9 @@ impl GraspEnv {
             return self.lift();
         }
         // Out of time: eq. 4's final step, r_b = 0 (the object was not picked up).
-        let r = reward::step_reward(&target_f, &theta_f, timed_out.then_some(false));
+        let moved = (self.sim.object_position() - before).norm();
+        let r = reward::step_reward(&target_f, &theta_f, timed_out.then_some(false))
+            - reward::displacement_penalty(&self.cfg.reward, moved);
         self.episode_return += r;
         let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();
         self.push_frame(&prev);
@@ -753,7 +797,7 @@ impl GraspEnv {
             self.finish(false, false, false);
         }
         Step {
-            obs: self.stack.stacked(),
+            obs: self.observation(),
             reward: r as f32,
             terminated: timed_out,
             truncated: false,
@@ -869,6 +913,73 @@ mod tests {
             b.closing.physics_steps + b.lift.physics_steps,
             env.sim.physics_steps()
         );
+    }
+
+    #[test]
+    fn m3g_sees_the_surface_the_critic_its_state_and_a_push_costs_reward() {
+        // M3G with the critic's state and the displacement penalty: the observation is
+        // the stacked frames (M3's values and 18 surface values), then 46 critic values;
+        // after stage 1 a fingertip
+        // touches the box, so some surface vector is within 1 cm, and every vector is
+        // within 30 cm.
+        let robot = Robot::builtin(Side::Left);
+        let objects = vec![("box".to_string(), ObjectSpec::default_box())];
+        let cfg = EnvConfig {
+            modality: Modality::M3G,
+            critic_state: true,
+            reward: RewardConfig {
+                displacement_weight: 1000.0,
+            },
+            ..EnvConfig::default()
+        };
+        let syn = crate::synergy::default_model();
+        let mut env = GraspEnv::new(
+            &robot,
+            objects.clone(),
+            syn.clone(),
+            SimConfig::default(),
+            cfg,
+        )
+        .expect("env");
+        let fl = env.layout().frame_len();
+        let pa = env.action_spec().continuous;
+        assert_eq!(fl, pa + 5 + 20 + N_SURFACE + 24);
+        assert_eq!(env.obs_dim(), 3 * fl + super::super::obs::CRITIC_STATE_LEN);
+        let o = env.reset(1);
+        assert_eq!(o.len(), env.obs_dim());
+        let frame = &o[2 * fl..3 * fl];
+        let surface = &frame[pa + 5 + 20..pa + 5 + 20 + N_SURFACE];
+        let lens: Vec<f32> = surface
+            .chunks(3)
+            .map(|v| v.iter().map(|x| x * x).sum::<f32>().sqrt())
+            .collect();
+        assert!(lens.iter().any(|&l| l < 0.01), "{lens:?}");
+        assert!(lens.iter().all(|&l| l < 0.3), "{lens:?}");
+        // The critic's copy of the vectors equals the newest frame's.
+        let critic = &o[3 * fl..];
+        assert_eq!(&critic[15..33], surface);
+        // A step that moves the box pays for it: the same step costs more with the
+        // penalty than without (identical scenes and actions).
+        let n = env.action_spec().continuous;
+        let push = Action {
+            cont: vec![1.0; n],
+            lift: false,
+        };
+        let r_pen = env.step(&push).reward;
+        let mut plain = GraspEnv::new(
+            &robot,
+            objects,
+            syn,
+            SimConfig::default(),
+            EnvConfig {
+                modality: Modality::M3G,
+                ..EnvConfig::default()
+            },
+        )
+        .expect("env");
+        plain.reset(1);
+        let r_plain = plain.step(&push).reward;
+        assert!(r_pen < r_plain, "{r_pen} against {r_plain}");
     }
 
     #[test]

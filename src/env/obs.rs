@@ -24,6 +24,11 @@ pub enum Modality {
     M2,
     /// Joint angles, tactile contacts and joint torque levels.
     M3,
+    /// Beyond the paper: M3 plus the object's geometry relative to the hand, for each
+    /// distal phalanx (FF, MF, RF, LF, TH) and the palm the vector to the nearest object
+    /// surface point in the palm frame ([`surface_vectors`]). In simulation it comes from
+    /// the object's mesh.
+    M3G,
 }
 
 impl std::str::FromStr for Modality {
@@ -33,7 +38,10 @@ impl std::str::FromStr for Modality {
             "M1" => Ok(Modality::M1),
             "M2" => Ok(Modality::M2),
             "M3" => Ok(Modality::M3),
-            other => Err(format!("unknown modality '{other}': expected M1, M2 or M3")),
+            "M3G" => Ok(Modality::M3G),
+            other => Err(format!(
+                "unknown modality '{other}': expected M1, M2, M3 or M3G"
+            )),
         }
     }
 }
@@ -44,6 +52,8 @@ pub const N_TACTILE: usize = 5;
 pub const N_TORQUE: usize = 20;
 /// Number of joint angles.
 pub const N_JOINTS: usize = 24;
+/// Number of surface-vector values of M3G (6 points x 3).
+pub const N_SURFACE: usize = 18;
 /// Number of torque levels.
 pub const N_LEVELS: usize = 6;
 
@@ -74,7 +84,15 @@ pub struct ObsLayout {
     pub history: usize,
     /// The segments of one frame, in order.
     pub segments: Vec<Segment>,
+    /// Values after the stacked frames that only an asymmetric critic reads
+    /// ([`CRITIC_STATE_LEN`] with `[env] critic_state = true`, else 0). The actor never
+    /// reads them: on the robot they are zeros.
+    pub critic_state: usize,
 }
+
+/// Length of the privileged simulator state an asymmetric critic reads
+/// ([`critic_state`]).
+pub const CRITIC_STATE_LEN: usize = 46;
 
 impl ObsLayout {
     /// The layout for a modality, PCA size and history length.
@@ -93,8 +111,11 @@ impl ObsLayout {
         if modality != Modality::M1 {
             push("tactile", N_TACTILE);
         }
-        if modality == Modality::M3 {
+        if matches!(modality, Modality::M3 | Modality::M3G) {
             push("torque_levels", N_TORQUE);
+        }
+        if modality == Modality::M3G {
+            push("surface", N_SURFACE);
         }
         push("joint_angles", N_JOINTS);
         ObsLayout {
@@ -102,7 +123,19 @@ impl ObsLayout {
             n_components,
             history,
             segments,
+            critic_state: 0,
         }
+    }
+
+    /// The layout with (`on`) or without the critic's privileged state appended.
+    pub fn with_critic_state(mut self, on: bool) -> Self {
+        self.critic_state = if on { CRITIC_STATE_LEN } else { 0 };
+        self
+    }
+
+    /// Length of the part the actor reads: the stacked frames.
+    pub fn actor_len(&self) -> usize {
+        self.frame_len() * self.history
     }
 
     /// Size of one frame.
@@ -110,9 +143,10 @@ impl ObsLayout {
         self.segments.iter().map(|s| s.len).sum()
     }
 
-    /// Size of the stacked observation given to the policy.
+    /// Size of the observation given to the policy: the stacked frames, then the
+    /// critic's privileged state when there is one.
     pub fn len(&self) -> usize {
-        self.frame_len() * self.history
+        self.actor_len() + self.critic_state
     }
 
     /// Whether the observation is empty (never, for a valid layout).
@@ -127,6 +161,7 @@ impl ObsLayout {
         tactile: &[bool; N_TACTILE],
         torque_levels: &[u8; N_TORQUE],
         joint_angles: &[f64; N_JOINTS],
+        surface: &[f64; N_SURFACE],
     ) -> Vec<f32> {
         let mut out = Vec::with_capacity(self.frame_len());
         for s in &self.segments {
@@ -139,11 +174,55 @@ impl ObsLayout {
                     out.extend(torque_levels.iter().map(|&l| f32::from(l.min(5)) / 5.0))
                 }
                 "joint_angles" => out.extend(joint_angles.iter().map(|&a| a as f32)),
+                "surface" => out.extend(surface.iter().map(|&v| v as f32)),
                 _ => unreachable!("unknown segment"),
             }
         }
         out
     }
+}
+
+/// The privileged simulator state of an asymmetric critic, [`CRITIC_STATE_LEN`] values,
+/// all in the palm frame: the object's position (3, m), orientation (the first two
+/// columns of its rotation matrix, 6), linear (3, m/s) and angular velocity (3, rad/s);
+/// for FF, MF, RF, LF, TH distal and the palm the vector from the collider's centre to the
+/// nearest object surface point (6 x 3, m) and its length (6); the distal phalanges'
+/// normal forces on the object (5, N); the object's mass (kg) and friction coefficient.
+pub fn critic_state(
+    geom: &crate::sim::CriticGeometry,
+    tip_forces: &[f64; 5],
+    mass: f64,
+    friction: f64,
+) -> Vec<f32> {
+    let inv = geom.palm.inverse();
+    let rel = inv * geom.object;
+    let r = rel.rotation.to_rotation_matrix();
+    let to_palm = |v: &nalgebra::Vector3<f64>| inv.rotation * v;
+    let mut out: Vec<f64> = Vec::with_capacity(CRITIC_STATE_LEN);
+    out.extend(rel.translation.vector.iter());
+    out.extend(r.matrix().column(0).iter());
+    out.extend(r.matrix().column(1).iter());
+    out.extend(to_palm(&geom.object_linvel).iter());
+    out.extend(to_palm(&geom.object_angvel).iter());
+    out.extend(surface_vectors(geom));
+    out.extend(geom.nearest.iter().map(|(c, p)| (p - c).norm()));
+    out.extend(tip_forces.iter());
+    out.push(mass);
+    out.push(friction);
+    debug_assert_eq!(out.len(), CRITIC_STATE_LEN);
+    out.into_iter().map(|x| x as f32).collect()
+}
+
+/// M3G's surface vectors: for FF, MF, RF, LF, TH distal and the palm, the vector from the
+/// collider's centre to the nearest object surface point, in the palm frame (m).
+pub fn surface_vectors(geom: &crate::sim::CriticGeometry) -> [f64; N_SURFACE] {
+    let rot = geom.palm.rotation.inverse();
+    let mut out = [0.0; N_SURFACE];
+    for (k, (c, p)) in geom.nearest.iter().enumerate() {
+        let v = rot * (p - c);
+        out[3 * k..3 * k + 3].copy_from_slice(v.as_slice());
+    }
+    out
 }
 
 /// The stack of the last `h` frames, oldest first, zero-padded at the episode start.
@@ -195,7 +274,44 @@ mod tests {
     use super::*;
 
     #[test]
+    fn critic_state_is_in_the_palm_frame_hand_computed() {
+        use nalgebra::{Isometry3, Point3, Vector3};
+        // The palm turned 90 degrees about z at (1, 0, 0); the object at (1, 2, 0) with
+        // the world's orientation, moving at +x 0.5 m/s. In the palm frame (x' = y,
+        // y' = -x) the object sits at (2, 0, 0) and moves along -y' at 0.5 m/s.
+        let palm = Isometry3::new(
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::z() * std::f64::consts::FRAC_PI_2,
+        );
+        let object = Isometry3::translation(1.0, 2.0, 0.0);
+        let mut nearest = [(Point3::origin(), Point3::origin()); 6];
+        nearest[0] = (Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, 0.0, 0.03));
+        let geom = crate::sim::CriticGeometry {
+            palm,
+            object,
+            object_linvel: Vector3::new(0.5, 0.0, 0.0),
+            object_angvel: Vector3::zeros(),
+            nearest,
+        };
+        let s = critic_state(&geom, &[1.0, 0.0, 0.0, 0.0, 2.0], 0.2, 0.8);
+        assert_eq!(s.len(), CRITIC_STATE_LEN);
+        let close = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+        assert!(close(&s[0..3], &[2.0, 0.0, 0.0]), "{:?}", &s[0..3]);
+        // Object x axis in the palm frame: world x = -y'.
+        assert!(close(&s[3..6], &[0.0, -1.0, 0.0]), "{:?}", &s[3..6]);
+        assert!(close(&s[9..12], &[0.0, -0.5, 0.0]), "{:?}", &s[9..12]);
+        // FF's vector: 3 cm along z (z' = z), its length 0.03.
+        assert!(close(&s[15..18], &[0.0, 0.0, 0.03]));
+        assert!((s[33] - 0.03).abs() < 1e-6);
+        assert!(close(&s[39..46], &[1.0, 0.0, 0.0, 0.0, 2.0, 0.2, 0.8]));
+        let l = ObsLayout::new(Modality::M3, 5, 3).with_critic_state(true);
+        assert_eq!((l.actor_len(), l.len()), (168, 168 + CRITIC_STATE_LEN));
+    }
+
+    #[test]
     fn sizes_per_modality_hand_computed() {
+        // M3G: M3 + 18 surface values.
+        assert_eq!(ObsLayout::new(Modality::M3G, 5, 3).frame_len(), 74);
         // PCA5: prev action 5 + 2 = 7; M1 7 + 24 = 31; M2 + 5 = 36; M3 + 20 = 56.
         assert_eq!(ObsLayout::new(Modality::M1, 5, 3).frame_len(), 31);
         assert_eq!(ObsLayout::new(Modality::M2, 5, 3).frame_len(), 36);
@@ -213,7 +329,8 @@ mod tests {
         lev[0] = 5;
         let mut ang = [0.0; 24];
         ang[23] = 1.5;
-        let f = l.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &tact, &lev, &ang);
+        let sv = [0.0; N_SURFACE];
+        let f = l.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &tact, &lev, &ang, &sv);
         assert_eq!(f.len(), 5 + 5 + 20 + 24);
         assert_eq!(&f[..5], &[0.5, -1.0, 0.25, 0.0, 1.0]);
         assert_eq!(&f[5..10], &[0.0, 0.0, 0.0, 0.0, 1.0]);
@@ -221,7 +338,16 @@ mod tests {
         assert_eq!(f[11], 0.6);
         assert_eq!(f[53], 1.5);
         let m1 = ObsLayout::new(Modality::M1, 3, 3);
-        assert_eq!(m1.frame(&[0.0; 5], &tact, &lev, &ang).len(), 29);
+        assert_eq!(m1.frame(&[0.0; 5], &tact, &lev, &ang, &sv).len(), 29);
+        // M3G: M3's values, then the 18 surface values before the joint angles.
+        let g = ObsLayout::new(Modality::M3G, 3, 3);
+        let mut sv = [0.0; N_SURFACE];
+        sv[0] = 0.02;
+        sv[17] = -0.05;
+        let f = g.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &tact, &lev, &ang, &sv);
+        assert_eq!(f.len(), 5 + 5 + 20 + 18 + 24);
+        assert_eq!((f[30], f[47], f[71]), (0.02, -0.05, 1.5));
+        assert_eq!(g.frame_len(), 72);
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! the measured finger angles when the action was chosen, both in radians.
 
 use crate::robot::joints::{finger_index, KEY_CLOSING_JOINTS};
+use serde::{Deserialize, Serialize};
 
 /// Weight of the closing reward in eq. 4.
 pub const CLOSING_WEIGHT: f64 = 0.03;
@@ -31,6 +32,43 @@ pub fn step_reward(target: &[f64; 22], theta: &[f64; 22], final_success: Option<
         Some(ok) => f64::from(u8::from(ok)),
         None => CLOSING_WEIGHT * closing_reward(target, theta),
     }
+}
+
+/// Shaped reward terms beyond the paper, all off by default (eq. 4-5 unchanged).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RewardConfig {
+    /// Penalty per metre the object's origin moves during a (non-final) stage-2 step:
+    /// `R -= displacement_weight * |p_after - p_before|`. A hand that pushes the object
+    /// away while adjusting its fingers pays for it (0: the paper's reward).
+    pub displacement_weight: f64,
+}
+
+impl Default for RewardConfig {
+    fn default() -> Self {
+        RewardConfig {
+            displacement_weight: 0.0,
+        }
+    }
+}
+
+impl RewardConfig {
+    /// Checks the ranges: `(field, message)` on error.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let w = self.displacement_weight;
+        if !(w.is_finite() && (0.0..=1000.0).contains(&w)) {
+            return Err((
+                "reward.displacement_weight",
+                format!("{w} is outside [0, 1000] per metre"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The shaped displacement penalty for an object that moved `moved` metres in one step.
+pub fn displacement_penalty(cfg: &RewardConfig, moved: f64) -> f64 {
+    cfg.displacement_weight * moved
 }
 
 #[cfg(test)]
@@ -58,6 +96,25 @@ mod tests {
         t[1] = 1.0;
         assert_eq!(step_reward(&t, &z, Some(true)), 1.0);
         assert_eq!(step_reward(&t, &z, Some(false)), 0.0);
+    }
+
+    #[test]
+    fn displacement_penalty_is_linear_in_the_distance_and_off_by_default() {
+        let cfg = RewardConfig {
+            displacement_weight: 10.0,
+        };
+        // 1 cm of push costs 0.1 with weight 10; nothing with the default.
+        assert!((displacement_penalty(&cfg, 0.01) - 0.1).abs() < 1e-12);
+        assert_eq!(displacement_penalty(&RewardConfig::default(), 0.01), 0.0);
+        assert!(cfg.validate().is_ok());
+        for bad in [-1.0, f64::NAN, 2000.0] {
+            let e = RewardConfig {
+                displacement_weight: bad,
+            }
+            .validate()
+            .unwrap_err();
+            assert_eq!(e.0, "reward.displacement_weight");
+        }
     }
 
     #[test]

@@ -27,7 +27,21 @@ pub struct GruPolicy {
     actor_mean: Linear,
     actor_lift: Option<Linear>,
     log_std: Tensor,
-    critic: Linear,
+    critic: Critic,
+    /// Observation values the actor reads (the first ones); the rest only the critic.
+    actor_dim: usize,
+}
+
+/// The GRU policy's value head: linear on the GRU state, or with an asymmetric critic a
+/// two-layer tanh MLP on the GRU state and the critic-only observation values.
+#[derive(Debug)]
+enum Critic {
+    Linear(Linear),
+    Asymmetric {
+        fc1: Linear,
+        fc2: Linear,
+        out: Linear,
+    },
 }
 
 impl GruPolicy {
@@ -41,7 +55,8 @@ impl GruPolicy {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut p = Params::default();
         let (e, h, c) = (cfg.embed_dim, cfg.gru_hidden, spec.continuous);
-        let embed = p.linear("embed", obs_dim, e, GAIN_HIDDEN, &mut rng)?;
+        let actor_dim = obs_dim - cfg.critic_state;
+        let embed = p.linear("embed", actor_dim, e, GAIN_HIDDEN, &mut rng)?;
         let mut gru_ts = HashMap::new();
         gru_ts.insert(
             "weight_ih_l0".to_string(),
@@ -76,7 +91,16 @@ impl GruPolicy {
             None
         };
         let log_std = p.add("actor.log_std", vec![cfg.init_log_std; c], &[c])?;
-        let critic = p.linear("critic", h, 1, GAIN_CRITIC, &mut rng)?;
+        let critic = if cfg.critic_state == 0 {
+            Critic::Linear(p.linear("critic", h, 1, GAIN_CRITIC, &mut rng)?)
+        } else {
+            let m = cfg.mlp_hidden;
+            Critic::Asymmetric {
+                fc1: p.linear("critic.fc1", h + cfg.critic_state, m, GAIN_HIDDEN, &mut rng)?,
+                fc2: p.linear("critic.fc2", m, m, GAIN_HIDDEN, &mut rng)?,
+                out: p.linear("critic.out", m, 1, GAIN_CRITIC, &mut rng)?,
+            }
+        };
         Ok(Self {
             params: p,
             obs_dim,
@@ -88,6 +112,7 @@ impl GruPolicy {
             actor_lift,
             log_std,
             critic,
+            actor_dim,
         })
     }
 }
@@ -116,9 +141,10 @@ impl ActorCritic for GruPolicy {
         h0: Option<&Tensor>,
     ) -> Result<PolicyOutput, PolicyError> {
         let (t, b, d) = obs.dims3()?;
+        let flat = obs.reshape((t * b, d))?;
         let x = self
             .embed
-            .forward(&obs.reshape((t * b, d))?)?
+            .forward(&flat.narrow(1, 0, self.actor_dim)?)?
             .tanh()?
             .reshape((t, b, ()))?;
         let keep = starts.affine(-1.0, 1.0)?.unsqueeze(2)?; // (T, B, 1)
@@ -138,7 +164,15 @@ impl ActorCritic for GruPolicy {
             Some(l) => Some(l.forward(&hs)?.squeeze(1)?),
             None => None,
         };
-        let value = self.critic.forward(&hs)?.squeeze(1)?;
+        let value = match &self.critic {
+            Critic::Linear(c) => c.forward(&hs)?,
+            Critic::Asymmetric { fc1, fc2, out } => {
+                let extra = flat.narrow(1, self.actor_dim, d - self.actor_dim)?;
+                let z = Tensor::cat(&[&hs, &extra], 1)?;
+                out.forward(&fc2.forward(&fc1.forward(&z)?.tanh()?)?.tanh()?)?
+            }
+        }
+        .squeeze(1)?;
         Ok(PolicyOutput {
             dist: ActionDist {
                 mean,
@@ -240,6 +274,36 @@ mod tests {
             assert!((a - b).abs() < 1e-6);
         }
         assert_eq!(seq.hidden.unwrap().dims(), &[2, 6]);
+    }
+
+    #[test]
+    fn the_actor_ignores_the_critic_only_values_and_the_critic_reads_them() {
+        let cfg = PolicyConfig {
+            embed_dim: 8,
+            gru_hidden: 6,
+            mlp_hidden: 5,
+            critic_state: 2,
+            ..PolicyConfig::default()
+        };
+        let spec = ActionSpec {
+            continuous: 2,
+            lift: true,
+        };
+        let p = GruPolicy::new(&cfg, 5, spec, 11).unwrap();
+        assert_eq!(p.params().vars()["embed.weight"].dims(), &[8, 3]);
+        assert_eq!(p.params().vars()["critic.fc1.weight"].dims(), &[5, 6 + 2]);
+        let starts = Tensor::ones((1, 1), DType::F32, &Device::Cpu).unwrap();
+        let run = |o: &[f32]| {
+            let obs = Tensor::from_vec(o.to_vec(), (1, 1, 5), &Device::Cpu).unwrap();
+            let out = p.forward_seq(&obs, &starts, None).unwrap();
+            (rows(&out.dist.mean), rows(&out.value))
+        };
+        let (m1, v1) = run(&[0.1, -0.2, 0.3, 0.0, 0.0]);
+        let (m2, v2) = run(&[0.1, -0.2, 0.3, 5.0, -5.0]);
+        assert_eq!(m1, m2);
+        assert_ne!(v1, v2);
+        let e = crate::policy::build_policy(&cfg, 2, spec, 0).err().unwrap();
+        assert!(e.to_string().contains("critic_state"), "{e}");
     }
 
     #[test]

@@ -17,6 +17,7 @@ use rand_chacha::ChaCha8Rng;
 pub struct MlpPolicy {
     params: Params,
     obs_dim: usize,
+    actor_dim: usize,
     spec: ActionSpec,
     actor_fc1: Linear,
     actor_fc2: Linear,
@@ -40,7 +41,10 @@ impl MlpPolicy {
         let mut p = Params::default();
         let h = cfg.mlp_hidden;
         let c = spec.continuous;
-        let actor_fc1 = p.linear("actor.fc1", obs_dim, h, GAIN_HIDDEN, &mut rng)?;
+        // With an asymmetric critic the actor reads the observation without its last
+        // `critic_state` values; the critic reads all of it.
+        let actor_dim = obs_dim - cfg.critic_state;
+        let actor_fc1 = p.linear("actor.fc1", actor_dim, h, GAIN_HIDDEN, &mut rng)?;
         let actor_fc2 = p.linear("actor.fc2", h, h, GAIN_HIDDEN, &mut rng)?;
         let actor_mean = p.linear("actor.mean", h, c, GAIN_ACTOR, &mut rng)?;
         let actor_lift = if spec.lift {
@@ -55,6 +59,7 @@ impl MlpPolicy {
         Ok(Self {
             params: p,
             obs_dim,
+            actor_dim,
             spec,
             actor_fc1,
             actor_fc2,
@@ -93,9 +98,10 @@ impl ActorCritic for MlpPolicy {
     ) -> Result<PolicyOutput, PolicyError> {
         let (t, b, d) = obs.dims3()?;
         let x = obs.reshape((t * b, d))?;
+        let xa = x.narrow(1, 0, self.actor_dim)?;
         let a = self
             .actor_fc2
-            .forward(&self.actor_fc1.forward(&x)?.tanh()?)?
+            .forward(&self.actor_fc1.forward(&xa)?.tanh()?)?
             .tanh()?;
         let mean = self.actor_mean.forward(&a)?;
         let lift_logit = match &self.actor_lift {

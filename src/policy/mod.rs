@@ -71,6 +71,11 @@ pub struct PolicyConfig {
     /// bias makes the untrained agent lift later (-2: p = 0.12, about 8 steps), so early
     /// episodes explore the closing motion instead of lifting after one or two steps.
     pub init_lift_bias: f32,
+    /// Values at the end of the observation that only the critic reads (an asymmetric
+    /// critic; 0: none). Set by the training config from `[env] critic_state`. With it,
+    /// the critic is a two-layer tanh MLP (`mlp_hidden` wide) over the actor's features
+    /// (the GRU state, or the observation the actor reads) and these values.
+    pub critic_state: usize,
 }
 
 impl Default for PolicyConfig {
@@ -82,6 +87,7 @@ impl Default for PolicyConfig {
             gru_hidden: 128,
             init_log_std: 0.0,
             init_lift_bias: 0.0,
+            critic_state: 0,
         }
     }
 }
@@ -178,6 +184,15 @@ pub fn build_policy(
         return Err(PolicyError::Config {
             field: "obs_dim",
             message: "the observation is empty".into(),
+        });
+    }
+    if cfg.critic_state >= obs_dim {
+        return Err(PolicyError::Config {
+            field: "critic_state",
+            message: format!(
+                "{} critic-only values leave nothing of an observation of {obs_dim} for the actor",
+                cfg.critic_state
+            ),
         });
     }
     if spec.continuous == 0 {

@@ -34,7 +34,7 @@ use super::RunError;
 use crate::env::action::{clip_unit, component_std, hand_targets};
 use crate::env::closing::ClosingPath;
 use crate::env::grasp::{Agent, AtMaxSteps, EnvConfig};
-use crate::env::obs::{FrameStack, ObsLayout};
+use crate::env::obs::{FrameStack, Modality, ObsLayout, N_SURFACE};
 use crate::eval::PolicyAgent;
 use crate::hardware::calibration::TactileCalibration;
 use crate::hardware::log::{AttemptLog, OutcomeRecord, StepRecord};
@@ -489,6 +489,13 @@ impl PolicyRunner {
             EnvConfig::default()
         };
         env.validate().map_err(|e| perr(e.to_string()))?;
+        if env.modality == Modality::M3G {
+            return Err(perr(
+                "modality M3G (surface vectors from the object's mesh) is simulation-only: \
+                 `grasp run` does not compute them from the depth cloud; use an M1-M3 policy"
+                    .into(),
+            ));
+        }
         let syn_path = dir.join("synergy.json");
         let full = if syn_path.is_file() {
             SynergyModel::load(&syn_path).map_err(|e| perr(e.to_string()))?
@@ -496,7 +503,10 @@ impl PolicyRunner {
             crate::synergy::default_model()
         };
         let synergy = full.truncated(n).map_err(|e| perr(e.to_string()))?;
-        let layout = ObsLayout::new(env.modality, n, env.history);
+        // A policy trained with an asymmetric critic reads the same frames; its critic's
+        // privileged values are zeros here (the actor never reads them).
+        let layout =
+            ObsLayout::new(env.modality, n, env.history).with_critic_state(env.critic_state);
         if layout.len() != loaded.policy.obs_dim() {
             return Err(perr(format!(
                 "the network expects observations of length {}, but {:?} with {n} components and history {} gives {}",
@@ -754,16 +764,21 @@ fn attempt_body<B: HandArm>(
     let n_cont = policy.synergy.n_components() + 2;
     let mut stack = FrameStack::new(&policy.layout);
     policy.agent.reset();
+    // M1-M3 only (M3G is refused when the policy is loaded): no surface vectors.
+    let surface = [0.0; N_SURFACE];
     stack.push(policy.layout.frame(
         &vec![0.0; n_cont],
         &m.tactile,
         &m.levels,
         &m.raw.joint_angles,
+        &surface,
     ));
     let mut steps = 0;
     let mut lifted = false;
     while steps < env.max_steps {
-        let a = policy.agent.act(&stack.stacked());
+        let mut obs = stack.stacked();
+        obs.resize(policy.layout.len(), 0.0);
+        let a = policy.agent.act(&obs);
         steps += 1;
         let mut logged: Vec<f64> = a.cont.iter().map(|&x| f64::from(x)).collect();
         logged.push(if a.lift { 1.0 } else { 0.0 });
@@ -784,11 +799,13 @@ fn attempt_body<B: HandArm>(
         );
         m = at.command(&targets, logged, cfg.control_period_s)?;
         let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();
-        stack.push(
-            policy
-                .layout
-                .frame(&prev, &m.tactile, &m.levels, &m.raw.joint_angles),
-        );
+        stack.push(policy.layout.frame(
+            &prev,
+            &m.tactile,
+            &m.levels,
+            &m.raw.joint_angles,
+            &surface,
+        ));
     }
     let base_out = AttemptOutcome {
         success: false,

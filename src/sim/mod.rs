@@ -51,7 +51,8 @@ pub use config::SimConfig;
 pub use object::{ConvexParts, ObjectShape, ObjectSpec};
 pub use sensors::Sensors;
 pub use world::{
-    FailureReport, HandSim, LiftOutcome, ObjectContact, PhysicsFailure, Scene, SimError,
+    CriticGeometry, FailureReport, HandSim, LiftOutcome, ObjectContact, PhysicsFailure, Scene,
+    SimError,
 };
 
 /// Index of a hand joint name (paper order) known to exist.

@@ -363,6 +363,22 @@ fn x_to(axis: &Vector3<f64>) -> UnitQuaternion<f64> {
     })
 }
 
+/// What [`HandSim::critic_geometry`] returns, in the world frame (m, m/s, rad/s).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CriticGeometry {
+    /// The palm body's pose.
+    pub palm: Isometry3<f64>,
+    /// The object body's pose.
+    pub object: Isometry3<f64>,
+    /// The object's linear velocity.
+    pub object_linvel: Vector3<f64>,
+    /// The object's angular velocity.
+    pub object_angvel: Vector3<f64>,
+    /// For FF, MF, RF, LF, TH distal and the palm: (collider centre, nearest object
+    /// surface point).
+    pub nearest: [(Point3<f64>, Point3<f64>); 6],
+}
+
 /// The hand, a table and one object, simulated in Rapier. `Send`: many can be stepped in
 /// parallel with rayon.
 pub struct HandSim {
@@ -1365,6 +1381,59 @@ impl HandSim {
         (q, qd)
     }
 
+    /// Privileged geometry for an asymmetric critic (never a sensor of the robot): the
+    /// palm's and the object's world poses, the object's linear and angular velocity, and
+    /// for each distal phalanx (FF, MF, RF, LF, TH) and the palm the centre of its first
+    /// collider with the nearest point of the object's surface to it (parry's projection,
+    /// millimetre-accurate on hulls). `None` before the first reset.
+    pub fn critic_geometry(&self) -> Option<CriticGeometry> {
+        let obj = self.sets.colliders.get(self.object_collider)?;
+        let obj_pose = self.collider_world_pose(self.object_collider)?;
+        let rb = self.sets.bodies.get(self.object_body)?;
+        let palm = self
+            .collider_links
+            .iter()
+            .find(|(_, name)| name.ends_with("palm"))
+            .map(|(h, _)| *h)?;
+        let palm_body = self
+            .sets
+            .bodies
+            .get(self.sets.colliders.get(palm)?.parent()?)?;
+        let v3 = |v: Vector| Vector3::new(v.x as f64, v.y as f64, v.z as f64);
+        let iso = |p: &Pose| {
+            Isometry3::from_parts(
+                nalgebra::Translation3::from(v3(p.translation)),
+                UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                    p.rotation.w as f64,
+                    p.rotation.x as f64,
+                    p.rotation.y as f64,
+                    p.rotation.z as f64,
+                )),
+            )
+        };
+        let near = |h: ColliderHandle| -> Option<(Point3<f64>, Point3<f64>)> {
+            let c = self.collider_world_pose(h)?.translation;
+            let p = obj.shape().project_point(&obj_pose, c, false).point;
+            Some((Point3::from(v3(c)), Point3::from(v3(p))))
+        };
+        let mut nearest = [(Point3::origin(), Point3::origin()); 6];
+        for (f, n) in nearest.iter_mut().enumerate() {
+            let h = if f < 5 {
+                *self.distal_colliders[f].first()?
+            } else {
+                palm
+            };
+            *n = near(h)?;
+        }
+        Some(CriticGeometry {
+            palm: iso(palm_body.position()),
+            object: iso(rb.position()),
+            object_linvel: v3(rb.linvel()),
+            object_angvel: v3(rb.angvel()),
+            nearest,
+        })
+    }
+
     /// Normal force (N) between the object and each distal phalanx (FF, MF, RF, LF, TH):
     /// the summed contact impulses of the last step divided by the step.
     pub fn tip_forces(&self) -> [f64; 5] {
@@ -1510,6 +1579,26 @@ mod tests {
             assert!(sim.step_physics());
         }
         sim
+    }
+
+    #[test]
+    fn critic_geometry_finds_the_palm_and_the_box_below_the_hand() {
+        // The hand 30 cm above a 6 cm box at rest: the box is below the palm, still, and
+        // every phalanx's nearest box point is 15-60 cm away, on the box's top face.
+        let sim = resting_box();
+        let g = sim.critic_geometry().expect("palm and object found");
+        let top = g.object.translation.vector.z + 0.03;
+        assert!(
+            g.palm.translation.vector.z > top + 0.1,
+            "{}",
+            g.palm.translation.vector.z
+        );
+        assert!(g.object_linvel.norm() < 0.01 && g.object_angvel.norm() < 0.1);
+        for (c, p) in &g.nearest {
+            let d = (p - c).norm();
+            assert!((0.15..0.6).contains(&d), "{d} m");
+            assert!((p.z - top).abs() < 1e-3, "{} against {top}", p.z);
+        }
     }
 
     #[test]

@@ -34,6 +34,7 @@ use crate::env::grasp::{AtMaxSteps, EnvConfig};
 use crate::env::object_curriculum::ObjectCurriculumConfig;
 use crate::env::obs::Modality;
 use crate::env::randomize::Randomization;
+use crate::env::reward::RewardConfig;
 use crate::env::stream::StreamConfig;
 use crate::policy::PolicyConfig;
 use crate::ppo::PpoConfig;
@@ -136,6 +137,8 @@ struct EnvSection {
     object_curriculum: Option<ObjectCurriculumConfig>,
     randomization: Option<Randomization>,
     stream: Option<StreamConfig>,
+    reward: Option<RewardConfig>,
+    critic_state: Option<bool>,
 }
 
 /// One file (or the merged chain): every key optional.
@@ -322,6 +325,8 @@ impl TrainConfig {
             object_curriculum: e.object_curriculum.unwrap_or(d.object_curriculum),
             randomization: e.randomization.unwrap_or(d.randomization),
             stream: e.stream.unwrap_or(d.stream),
+            reward: e.reward.unwrap_or(d.reward),
+            critic_state: e.critic_state.unwrap_or(d.critic_state),
         };
         let ppo_defaults = PpoConfig::default();
         let cfg = TrainConfig {
@@ -365,7 +370,17 @@ impl TrainConfig {
             num_envs: self.num_envs,
             total_timesteps: self.total_timesteps,
             env_threads: self.env_threads(),
-            policy: self.policy.clone(),
+            policy: PolicyConfig {
+                critic_state: match self.env.kind {
+                    EnvKind::Grasp => {
+                        crate::env::obs::ObsLayout::new(Modality::M1, 1, 1)
+                            .with_critic_state(self.env.grasp.critic_state)
+                            .critic_state
+                    }
+                    _ => 0,
+                },
+                ..self.policy.clone()
+            },
             ..self.ppo.clone()
         }
     }
