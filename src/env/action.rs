@@ -57,6 +57,19 @@ pub struct ActionConfig {
     pub wrist_scale: f64,
     /// What the increments are added to.
     pub anchor: Anchor,
+    /// Beyond the paper (0: off, the paper's action): the action gets one more continuous
+    /// component, the grip `g`, and the finger targets are blended towards the power
+    /// grasp (baseline 1's closed posture) by `w = clip(g, 0, 1) * grip_scale`:
+    /// `theta_target = (1 - w) eq.2 + w theta_closed`. With `w = 1` the fingers squeeze
+    /// as baseline 1's do; the policy learns when. In [0, 1].
+    pub grip_scale: f64,
+}
+
+impl ActionConfig {
+    /// Continuous action components for `n` synergies: `n + 2`, plus 1 with the grip.
+    pub fn continuous(&self, n: usize) -> usize {
+        n + 2 + usize::from(self.grip_scale > 0.0)
+    }
 }
 
 impl Default for ActionConfig {
@@ -65,6 +78,7 @@ impl Default for ActionConfig {
             eps_scale: 0.25,
             wrist_scale: 0.05,
             anchor: Anchor::Measured,
+            grip_scale: 0.0,
         }
     }
 }
@@ -78,6 +92,8 @@ pub struct Decoded {
     pub d_wrist: [f64; 2],
     /// Lift decision.
     pub lift: bool,
+    /// Blend weight `w` towards the power grasp (0 without the grip component).
+    pub grip: f64,
 }
 
 /// Clips a raw policy output to [-1, 1] (NaN becomes 0).
@@ -98,6 +114,11 @@ pub fn decode(cfg: &ActionConfig, std: &[f64], raw: &[f32], lift: bool) -> Decod
         d_eps: (0..n).map(|k| get(k) * cfg.eps_scale * std[k]).collect(),
         d_wrist: [get(n) * cfg.wrist_scale, get(n + 1) * cfg.wrist_scale],
         lift,
+        grip: if cfg.grip_scale > 0.0 {
+            get(n + 2).max(0.0) * cfg.grip_scale
+        } else {
+            0.0
+        },
     }
 }
 
@@ -113,8 +134,10 @@ pub fn component_std(model: &SynergyModel) -> Vec<f64> {
 /// The 24 hand targets of a continuous action `raw` (`n + 2` policy outputs) from the
 /// anchor posture `q` (paper order; see [`Anchor`]): the fingers by eq. 2,
 /// `P^-1(d_eps + P(theta_f))` made feasible for `finger_limits`, the wrist by
-/// `q_w + d_theta_w` clamped to `wrist_limits`. The environment and the robot pipeline
+/// `q_w + d_theta_w` clamped to `wrist_limits`; with the grip, the fingers blended towards
+/// `closed` (see [`ActionConfig::grip_scale`]). The environment and the robot pipeline
 /// both use this function, so a policy acts identically in both.
+#[allow(clippy::too_many_arguments)]
 pub fn hand_targets(
     cfg: &ActionConfig,
     std: &[f64],
@@ -122,11 +145,18 @@ pub fn hand_targets(
     finger_limits: &[(f64, f64); 22],
     wrist_limits: &[(f64, f64); 2],
     q: &[f64; 24],
+    closed: &[f64; 24],
     raw: &[f32],
 ) -> [f64; 24] {
     let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
     let d = decode(cfg, std, raw, false);
-    let target_f = model.target(&theta_f, &d.d_eps, finger_limits);
+    let mut target_f = model.target(&theta_f, &d.d_eps, finger_limits);
+    if d.grip > 0.0 {
+        for (k, t) in target_f.iter_mut().enumerate() {
+            let (lo, hi) = finger_limits[k];
+            *t = (*t + d.grip * (closed[k + 2] - *t)).clamp(lo, hi);
+        }
+    }
     let mut targets = [0.0; 24];
     for (w, (lo, hi)) in wrist_limits.iter().enumerate() {
         targets[w] = (q[w] + d.d_wrist[w]).clamp(*lo, *hi);
@@ -161,6 +191,7 @@ mod tests {
             &fl,
             &wl,
             &qw,
+            &crate::sim::script::power_grasp(),
             &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
         );
         assert_eq!(t[0], wl[0].1);
@@ -168,6 +199,61 @@ mod tests {
         let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
         let expect = model.target(&theta_f, &[0.0; 5], &fl);
         assert_eq!(&t[2..], &expect[..]);
+    }
+
+    #[test]
+    fn the_grip_blends_the_fingers_towards_the_power_grasp() {
+        let model = crate::synergy::default_model().truncated(5).unwrap();
+        let std = component_std(&model);
+        let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
+        let fl = robot.finger_limits();
+        let hl = robot.hand_limits();
+        let wl = [hl[0], hl[1]];
+        let q = crate::robot::Posture::Open.angles();
+        let closed = crate::sim::script::power_grasp();
+        let cfg = ActionConfig {
+            grip_scale: 1.0,
+            ..ActionConfig::default()
+        };
+        assert_eq!(cfg.continuous(5), 8);
+        assert_eq!(ActionConfig::default().continuous(5), 7);
+        let at = |g: f32| {
+            hand_targets(
+                &cfg,
+                &std,
+                &model,
+                &fl,
+                &wl,
+                &q,
+                &closed,
+                &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, g],
+            )
+        };
+        let plain = hand_targets(
+            &ActionConfig::default(),
+            &std,
+            &model,
+            &fl,
+            &wl,
+            &q,
+            &closed,
+            &[0.0; 7],
+        );
+        // g <= 0: eq. 2 as without the grip; g = 1: the power grasp; g = 0.5: halfway.
+        assert_eq!(at(-0.7), plain);
+        let full = at(1.0);
+        let half = at(0.5);
+        for k in 2..24 {
+            assert!(
+                (full[k] - closed[k].clamp(fl[k - 2].0, fl[k - 2].1)).abs() < 1e-12,
+                "joint {k}"
+            );
+            assert!(
+                (half[k] - 0.5 * (plain[k] + full[k])).abs() < 1e-12,
+                "joint {k}"
+            );
+        }
+        assert_eq!(&full[..2], &plain[..2]);
     }
 
     #[test]

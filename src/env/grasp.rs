@@ -188,6 +188,12 @@ impl EnvConfig {
                 format!("{} is outside [0, 0.5] rad", self.action.wrist_scale),
             );
         }
+        if !(0.0..=1.0).contains(&self.action.grip_scale) {
+            return bad(
+                "action.grip_scale",
+                format!("{} is outside [0, 1]", self.action.grip_scale),
+            );
+        }
         if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {
             return bad("curriculum.fixed_rate", "must be in [0, 1]".into());
         }
@@ -305,8 +311,12 @@ impl GraspEnv {
             .map(|o| o.1.clone())
             .ok_or(GraspEnvError::NoObjects)?;
         let sim = HandSim::new(robot, first, sim_cfg)?;
-        let layout = ObsLayout::new(cfg.modality, synergy.n_components(), cfg.history)
-            .with_critic_state(cfg.critic_state);
+        let layout = ObsLayout::with_action_len(
+            cfg.modality,
+            cfg.action.continuous(synergy.n_components()),
+            cfg.history,
+        )
+        .with_critic_state(cfg.critic_state);
         let stack = FrameStack::new(&layout);
         let eps_std = component_std(&synergy);
         let limits = robot.hand_limits();
@@ -706,7 +716,7 @@ impl Env for GraspEnv {
 
     fn action_spec(&self) -> ActionSpec {
         ActionSpec {
-            continuous: self.synergy.n_components() + 2,
+            continuous: self.cfg.action.continuous(self.synergy.n_components()),
             lift: true,
         }
     }
@@ -731,7 +741,7 @@ impl Env for GraspEnv {
         self.phases
             .closing
             .add(self.sim.physics_steps() - before, t);
-        let zero = vec![0.0; self.synergy.n_components() + 2];
+        let zero = vec![0.0; self.cfg.action.continuous(self.synergy.n_components())];
         self.push_frame(&zero);
         self.observation()
     }
@@ -771,6 +781,7 @@ impl GraspEnv {
             &self.finger_limits,
             &self.wrist_limits,
             base,
+            &self.closed,
             &a.cont,
         );
         let target_f: [f64; 22] = std::array::from_fn(|k| targets[k + 2]);

@@ -97,6 +97,14 @@ pub const CRITIC_STATE_LEN: usize = 46;
 impl ObsLayout {
     /// The layout for a modality, PCA size and history length.
     pub fn new(modality: Modality, n_components: usize, history: usize) -> Self {
+        Self::with_action_len(modality, n_components + 2, history)
+    }
+
+    /// The layout whose previous-action segment holds `action_len` values (the action's
+    /// continuous components: `n + 2`, or `n + 3` with the grip of
+    /// [`crate::env::action::ActionConfig::grip_scale`]).
+    pub fn with_action_len(modality: Modality, action_len: usize, history: usize) -> Self {
+        let n_components = action_len.saturating_sub(2);
         let mut segments = Vec::new();
         let mut off = 0;
         let mut push = |name, len| {
@@ -107,7 +115,7 @@ impl ObsLayout {
             });
             off += len;
         };
-        push("prev_action", n_components + 2);
+        push("prev_action", action_len);
         if modality != Modality::M1 {
             push("tactile", N_TACTILE);
         }

@@ -506,7 +506,8 @@ impl PolicyRunner {
         // A policy trained with an asymmetric critic reads the same frames; its critic's
         // privileged values are zeros here (the actor never reads them).
         let layout =
-            ObsLayout::new(env.modality, n, env.history).with_critic_state(env.critic_state);
+            ObsLayout::with_action_len(env.modality, env.action.continuous(n), env.history)
+                .with_critic_state(env.critic_state);
         if layout.len() != loaded.policy.obs_dim() {
             return Err(perr(format!(
                 "the network expects observations of length {}, but {:?} with {n} components and history {} gives {}",
@@ -761,7 +762,8 @@ fn attempt_body<B: HandArm>(
     // 4. Stage 2: the policy.
     let hl = robot.hand_limits();
     let wrist_limits = [hl[0], hl[1]];
-    let n_cont = policy.synergy.n_components() + 2;
+    let n_cont = env.action.continuous(policy.synergy.n_components());
+    let closed = script::power_grasp();
     let mut stack = FrameStack::new(&policy.layout);
     policy.agent.reset();
     // M1-M3 only (M3G is refused when the policy is loaded): no surface vectors.
@@ -795,6 +797,7 @@ fn attempt_body<B: HandArm>(
             &finger_limits,
             &wrist_limits,
             env.action.anchor.pick(&m.raw.joint_angles, &at.last_sent),
+            &closed,
             &a.cont,
         );
         m = at.command(&targets, logged, cfg.control_period_s)?;
