@@ -263,6 +263,7 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
                 save_cloud(p, &source)?;
             }
             let plan = plan(&robot, &source, &cfg, &policy, seed)?;
+            policy.set_object_cloud(object_cloud(&source));
             attempt(
                 arm,
                 &robot,
@@ -291,6 +292,7 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
             }
             let cfg = pipeline_config(&a, None)?;
             let plan = plan(&robot, &source, &cfg, &policy, seed)?;
+            policy.set_object_cloud(object_cloud(&source));
             #[cfg(feature = "ros")]
             {
                 let arm = connect_ros(&a.ros_url)?;
@@ -310,6 +312,15 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
             let _ = (plan, calibration);
             Ok(())
         }
+    }
+}
+
+/// The object's points of a cloud source (what an M3G policy measures its surface
+/// vectors against); none for a given grasp.
+fn object_cloud(source: &GraspSource) -> Option<Vec<nalgebra::Point3<f64>>> {
+    match source {
+        GraspSource::Cloud(c) => Some(c.clone()),
+        GraspSource::Given(_) => None,
     }
 }
 

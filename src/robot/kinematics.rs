@@ -25,6 +25,28 @@ impl Robot {
         poses.into_iter().map(|p| inv * p).collect()
     }
 
+    /// The points M3G's surface vectors start from, in the palm frame: the centre of the
+    /// first collision element of each distal phalanx (FF, MF, RF, LF, TH) and of the
+    /// palm (the simulator's collider centres for the same joint angles).
+    pub fn surface_points_palm(&self, hand: &[f64; 24]) -> [Point3<f64>; 6] {
+        let poses = self.hand_fk_palm(hand);
+        let links = [
+            self.hand.distal[0],
+            self.hand.distal[1],
+            self.hand.distal[2],
+            self.hand.distal[3],
+            self.hand.distal[4],
+            self.hand.palm,
+        ];
+        links.map(|l| {
+            let origin = self.links[l]
+                .collisions
+                .first()
+                .map_or(Isometry3::identity(), |c| c.origin);
+            Point3::from((poses[l] * origin).translation.vector)
+        })
+    }
+
     /// The five fingertip positions (FF, MF, RF, LF, TH) in the palm frame.
     pub fn fingertips_palm(&self, hand: &[f64; 24]) -> [Point3<f64>; 5] {
         let poses = self.hand_fk_palm(hand);

@@ -310,6 +310,31 @@ impl GraspPlan {
     }
 }
 
+/// M3G's surface vectors on the robot: for each distal phalanx and the palm
+/// ([`Robot::surface_points_palm`] at hand angles `q`), the vector to the nearest point of
+/// the object's `cloud` (world frame), in the palm frame. `root` is the hand root's
+/// (forearm's, the flange's) world pose.
+pub fn cloud_surface_vectors(
+    robot: &Robot,
+    root: &Isometry3<f64>,
+    q: &[f64; N_HAND_JOINTS],
+    cloud: &[Point3<f64>],
+) -> [f64; N_SURFACE] {
+    let palm = root * robot.hand_fk_palm(q)[robot.hand.forearm].inverse();
+    let mut out = [0.0; N_SURFACE];
+    for (k, p) in robot.surface_points_palm(q).iter().enumerate() {
+        let w = palm * p;
+        let nearest = cloud
+            .iter()
+            .min_by(|a, b| (*a - w).norm_squared().total_cmp(&(*b - w).norm_squared()));
+        if let Some(n) = nearest {
+            let v = palm.rotation.inverse() * (n - w);
+            out[3 * k..3 * k + 3].copy_from_slice(v.as_slice());
+        }
+    }
+    out
+}
+
 /// Arm configurations for `grasp` with the hand in `preshape`: (pre-grasp, grasp).
 fn solve_arm(
     robot: &Robot,
@@ -450,9 +475,18 @@ pub struct PolicyRunner {
     env: EnvConfig,
     layout: ObsLayout,
     dir: PathBuf,
+    /// The object's points (world frame, m) an M3G policy measures its surface vectors
+    /// against; the object is assumed still during the grasp.
+    cloud: Option<Vec<Point3<f64>>>,
 }
 
 impl PolicyRunner {
+    /// Gives the policy the object's point cloud (world frame, m): an M3G policy's surface
+    /// vectors are measured to its nearest points. Other modalities ignore it.
+    pub fn set_object_cloud(&mut self, cloud: Option<Vec<Point3<f64>>>) {
+        self.cloud = cloud;
+    }
+
     /// Loads the checkpoint folder `dir` (`checkpoint.safetensors`, and beside it the
     /// `config.toml` of its training run and its `synergy.json`; without them the
     /// environment defaults and the shipped synergy model are used). The policy acts
@@ -489,13 +523,6 @@ impl PolicyRunner {
             EnvConfig::default()
         };
         env.validate().map_err(|e| perr(e.to_string()))?;
-        if env.modality == Modality::M3G {
-            return Err(perr(
-                "modality M3G (surface vectors from the object's mesh) is simulation-only: \
-                 `grasp run` does not compute them from the depth cloud; use an M1-M3 policy"
-                    .into(),
-            ));
-        }
         let syn_path = dir.join("synergy.json");
         let full = if syn_path.is_file() {
             SynergyModel::load(&syn_path).map_err(|e| perr(e.to_string()))?
@@ -524,6 +551,7 @@ impl PolicyRunner {
             env,
             layout,
             dir: dir.to_path_buf(),
+            cloud: None,
         })
     }
 
@@ -711,6 +739,15 @@ fn attempt_body<B: HandArm>(
     cfg: &PipelineConfig,
 ) -> Result<AttemptOutcome, RunError> {
     let env = policy.env.clone();
+    if env.modality == Modality::M3G && policy.cloud.is_none() {
+        return Err(RunError::Policy {
+            path: policy.dir.clone(),
+            detail: "modality M3G measures the object's surface in its point cloud: give \
+                     --cloud FILE (or let the sim backend's cameras capture one) instead of a \
+                     grasp without a cloud"
+                .into(),
+        });
+    }
     // 1. tau_j0 with the empty, still hand.
     let mut base = Vec::with_capacity(cfg.baseline_readings);
     for k in 0..cfg.baseline_readings {
@@ -766,14 +803,22 @@ fn attempt_body<B: HandArm>(
     let closed = script::power_grasp();
     let mut stack = FrameStack::new(&policy.layout);
     policy.agent.reset();
-    // M1-M3 only (M3G is refused when the policy is loaded): no surface vectors.
-    let surface = [0.0; N_SURFACE];
+    // M3G's surface vectors from the object's cloud, the arm still at the grasp pose.
+    let root = cfg.arm_base.pose() * ur10e::fk(&plan.grasp_q);
+    let cloud = match env.modality {
+        Modality::M3G => policy.cloud.clone(),
+        _ => None,
+    };
+    let surface = |q: &[f64; N_HAND_JOINTS]| match &cloud {
+        Some(c) => cloud_surface_vectors(robot, &root, q, c),
+        None => [0.0; N_SURFACE],
+    };
     stack.push(policy.layout.frame(
         &vec![0.0; n_cont],
         &m.tactile,
         &m.levels,
         &m.raw.joint_angles,
-        &surface,
+        &surface(&m.raw.joint_angles),
     ));
     let mut steps = 0;
     let mut lifted = false;
@@ -807,7 +852,7 @@ fn attempt_body<B: HandArm>(
             &m.tactile,
             &m.levels,
             &m.raw.joint_angles,
-            &surface,
+            &surface(&m.raw.joint_angles),
         ));
     }
     let base_out = AttemptOutcome {
@@ -866,6 +911,39 @@ fn attempt_body<B: HandArm>(
 mod tests {
     use super::*;
     use crate::robot::Side;
+
+    #[test]
+    fn cloud_surface_vectors_point_at_the_nearest_cloud_point_in_the_palm_frame() {
+        // The hand root at 1 m height, turned 90 degrees about z; a cloud of two points:
+        // one exactly at the thumb's distal point (its vector is zero), one 5 cm beside
+        // the palm point along the palm's own x axis (the palm's vector is (0.05, 0, 0)).
+        let robot = Robot::builtin(Side::Left);
+        let q = crate::robot::Posture::Open.angles();
+        let root = Isometry3::new(
+            Vector3::new(0.2, 0.0, 1.0),
+            Vector3::z() * std::f64::consts::FRAC_PI_2,
+        );
+        let palm = root * robot.hand_fk_palm(&q)[robot.hand.forearm].inverse();
+        let pts = robot.surface_points_palm(&q);
+        let thumb = palm * pts[4];
+        let beside = palm * (pts[5] + Vector3::new(0.05, 0.0, 0.0));
+        let v = cloud_surface_vectors(&robot, &root, &q, &[thumb, beside]);
+        assert!(
+            v[12..15].iter().all(|x| x.abs() < 1e-12),
+            "{:?}",
+            &v[12..15]
+        );
+        let p = &v[15..18];
+        assert!(
+            (p[0] - 0.05).abs() < 1e-9 && p[1].abs() < 1e-9 && p[2].abs() < 1e-9,
+            "{p:?}"
+        );
+        // An empty cloud leaves every vector at zero.
+        assert_eq!(
+            cloud_surface_vectors(&robot, &root, &q, &[]),
+            [0.0; N_SURFACE]
+        );
+    }
 
     #[test]
     fn snap_top_down_hand_computed() {

@@ -1602,6 +1602,21 @@ mod tests {
     }
 
     #[test]
+    fn critic_geometry_points_are_the_kinematic_surface_points() {
+        // grasp run computes M3G's start points by forward kinematics: they must be the
+        // simulator's collider centres (palm frame) within a millimetre.
+        let sim = resting_box();
+        let g = sim.critic_geometry().unwrap();
+        let (q, _) = sim.joint_state();
+        let kin = sim.robot.surface_points_palm(&q);
+        let inv = g.palm.inverse();
+        for (k, (c, _)) in g.nearest.iter().enumerate() {
+            let d = (inv * c - kin[k]).norm();
+            assert!(d < 1e-3, "point {k}: {d} m apart");
+        }
+    }
+
+    #[test]
     fn contact_force_of_a_resting_object_is_its_weight() {
         // The force calibration behind the tactile threshold: impulse / dt = m g.
         let sim = resting_box();
