@@ -387,6 +387,52 @@ fn shipped_configs_load() {
 }
 
 #[test]
+fn each_lever_config_is_the_shipped_recipe_with_one_change() {
+    // configs/levers/*.toml (the issue-29 lever table): ship.toml with one setting changed.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    let ship = TrainConfig::load(&dir.join("ship.toml")).unwrap();
+    let mut n = 0;
+    for e in std::fs::read_dir(dir.join("levers")).unwrap() {
+        let p = e.unwrap().path();
+        let file = p.file_stem().unwrap().to_string_lossy().into_owned();
+        let mut c = TrainConfig::load(&p).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(c.name, format!("ship_{file}"));
+        c.name = ship.name.clone();
+        let g = &mut c.env.grasp;
+        match file.as_str() {
+            "m3g" => {
+                assert_eq!(g.modality, grasp::env::obs::Modality::M3G);
+                g.modality = ship.env.grasp.modality;
+            }
+            "critic_state" => {
+                assert!(g.critic_state);
+                g.critic_state = false;
+            }
+            "grip" => {
+                assert_eq!(g.action.grip_scale, 1.0);
+                g.action.grip_scale = 0.0;
+            }
+            "displacement" => {
+                assert_eq!(g.reward.displacement_weight, 10.0);
+                g.reward.displacement_weight = 0.0;
+            }
+            "object_curriculum" => {
+                assert!(g.object_curriculum.enabled);
+                g.object_curriculum.enabled = false;
+            }
+            "no_wrist" => {
+                assert_eq!(g.action.wrist_scale, 0.0);
+                g.action.wrist_scale = ship.env.grasp.action.wrist_scale;
+            }
+            other => panic!("an unexpected lever config {other}.toml"),
+        }
+        assert_eq!(c, ship, "{file}.toml changes more than its lever");
+        n += 1;
+    }
+    assert_eq!(n, 6);
+}
+
+#[test]
 fn a_run_killed_before_its_first_checkpoint_starts_afresh() {
     let tmp = tempfile::tempdir().unwrap();
     let cfg = cartpole_config(tmp.path(), 128);
