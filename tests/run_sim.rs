@@ -17,6 +17,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 const POLICY: &str = "assets/policies/quick_gru_m3_pca5";
+/// The shipped M3G policy (surface vectors from the object's cloud).
+const M3G_POLICY: &str = "assets/policies/ship_gru_m3g_pca5";
 
 fn sim_arm(cfg: SimBackendConfig) -> SimHandArm {
     let robot = Robot::builtin(Side::Left);
@@ -324,6 +326,34 @@ fn the_success_is_not_hard_wired_zero_friction_and_an_empty_grasp_fail() {
     assert!(ok, "{err}");
     assert_eq!(v["outcome"]["success"], false, "{v:#}");
     assert_eq!(v["outcome"]["touched"], false, "{v:#}");
+}
+
+#[test]
+fn the_m3g_policy_grasps_on_the_cameras_cloud_and_refuses_a_grasp_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("m3g.jsonl");
+    let log = log.to_str().unwrap();
+    let (ok, v, err) = run_json(&[
+        "--policy", M3G_POLICY, "--object", "box", "--seed", "1", "--log", log,
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(v["outcome"]["success"], true, "{v:#}");
+    assert_eq!(v["outcome"]["lifted"], true, "{v:#}");
+    // A grasp given by its centre has no cloud to measure the surface in.
+    let (ok, _, err) = run_json(&[
+        "--policy",
+        M3G_POLICY,
+        "--object",
+        "box",
+        "--center",
+        "0.0,0.0,0.057",
+        "--closing",
+        "1,0,0",
+        "--log",
+        log,
+    ]);
+    assert!(!ok);
+    assert!(err.contains("M3G") && err.contains("--cloud"), "{err}");
 }
 
 #[test]

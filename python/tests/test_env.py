@@ -228,3 +228,18 @@ def test_shipped_policy_and_baselines():
         p.act(np.full(p.obs_dim, np.nan))
     with pytest.raises(ValueError, match="checkpoint"):
         grasp_rl.Policy(ROOT / "configs")
+
+
+def test_the_m3g_policy_runs_in_its_own_setup():
+    # The shipped M3G policy (surface vectors from the object's mesh) acts on the env its
+    # config describes: the observation sizes agree and episodes repeat exactly.
+    p = grasp_rl.Policy(ROOT / "assets/policies/ship_gru_m3g_pca5")
+    e = grasp_rl.GraspEnv(config_toml=p.config_toml, objects=OBJECTS, difficulty=1.0)
+    assert e.observation_space.shape == (p.obs_dim,)
+    successes = 0
+    for seed in range(4):
+        ep = grasp_rl.run_episode(e, p, scene_seed=seed)
+        assert grasp_rl.run_episode(e, p, scene_seed=seed) == ep
+        successes += ep["success"]
+    assert successes >= 2
+
