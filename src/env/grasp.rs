@@ -148,6 +148,15 @@ pub enum GraspEnvError {
 }
 
 impl EnvConfig {
+    /// The observation layout of this MDP for `n` synergy components: the modality's
+    /// frames (the previous action with the grip's value when there is one), then the
+    /// critic's privileged state when `critic_state` is on. The environment and the
+    /// robot pipeline both build it here.
+    pub fn layout(&self, n: usize) -> ObsLayout {
+        ObsLayout::with_action_len(self.modality, n, self.action.continuous(n), self.history)
+            .with_critic_state(self.critic_state)
+    }
+
     /// Checks ranges; errors name the field.
     pub fn validate(&self) -> Result<Posture, GraspEnvError> {
         let bad = |field, message: String| Err(GraspEnvError::Config { field, message });
@@ -311,12 +320,7 @@ impl GraspEnv {
             .map(|o| o.1.clone())
             .ok_or(GraspEnvError::NoObjects)?;
         let sim = HandSim::new(robot, first, sim_cfg)?;
-        let layout = ObsLayout::with_action_len(
-            cfg.modality,
-            cfg.action.continuous(synergy.n_components()),
-            cfg.history,
-        )
-        .with_critic_state(cfg.critic_state);
+        let layout = cfg.layout(synergy.n_components());
         let stack = FrameStack::new(&layout);
         let eps_std = component_std(&synergy);
         let limits = robot.hand_limits();

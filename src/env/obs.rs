@@ -97,14 +97,18 @@ pub const CRITIC_STATE_LEN: usize = 46;
 impl ObsLayout {
     /// The layout for a modality, PCA size and history length.
     pub fn new(modality: Modality, n_components: usize, history: usize) -> Self {
-        Self::with_action_len(modality, n_components + 2, history)
+        Self::with_action_len(modality, n_components, n_components + 2, history)
     }
 
     /// The layout whose previous-action segment holds `action_len` values (the action's
     /// continuous components: `n + 2`, or `n + 3` with the grip of
     /// [`crate::env::action::ActionConfig::grip_scale`]).
-    pub fn with_action_len(modality: Modality, action_len: usize, history: usize) -> Self {
-        let n_components = action_len.saturating_sub(2);
+    pub fn with_action_len(
+        modality: Modality,
+        n_components: usize,
+        action_len: usize,
+        history: usize,
+    ) -> Self {
         let mut segments = Vec::new();
         let mut off = 0;
         let mut push = |name, len| {
@@ -314,6 +318,9 @@ mod tests {
         assert!(close(&s[39..46], &[1.0, 0.0, 0.0, 0.0, 2.0, 0.2, 0.8]));
         let l = ObsLayout::new(Modality::M3, 5, 3).with_critic_state(true);
         assert_eq!((l.actor_len(), l.len()), (168, 168 + CRITIC_STATE_LEN));
+        // The grip's extra action value widens the frame, not the synergy count.
+        let g = ObsLayout::with_action_len(Modality::M3, 5, 8, 3);
+        assert_eq!((g.n_components, g.frame_len()), (5, 57));
     }
 
     #[test]

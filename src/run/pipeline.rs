@@ -321,6 +321,7 @@ pub fn cloud_surface_vectors(
     cloud: &[Point3<f64>],
 ) -> [f64; N_SURFACE] {
     let palm = root * robot.hand_fk_palm(q)[robot.hand.forearm].inverse();
+    let to_palm = palm.rotation.inverse();
     let mut out = [0.0; N_SURFACE];
     for (k, p) in robot.surface_points_palm(q).iter().enumerate() {
         let w = palm * p;
@@ -328,7 +329,7 @@ pub fn cloud_surface_vectors(
             .iter()
             .min_by(|a, b| (*a - w).norm_squared().total_cmp(&(*b - w).norm_squared()));
         if let Some(n) = nearest {
-            let v = palm.rotation.inverse() * (n - w);
+            let v = to_palm * (n - w);
             out[3 * k..3 * k + 3].copy_from_slice(v.as_slice());
         }
     }
@@ -532,9 +533,7 @@ impl PolicyRunner {
         let synergy = full.truncated(n).map_err(|e| perr(e.to_string()))?;
         // A policy trained with an asymmetric critic reads the same frames; its critic's
         // privileged values are zeros here (the actor never reads them).
-        let layout =
-            ObsLayout::with_action_len(env.modality, env.action.continuous(n), env.history)
-                .with_critic_state(env.critic_state);
+        let layout = env.layout(n);
         if layout.len() != loaded.policy.obs_dim() {
             return Err(perr(format!(
                 "the network expects observations of length {}, but {:?} with {n} components and history {} gives {}",

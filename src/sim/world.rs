@@ -336,6 +336,24 @@ fn pose_f32(p: &Isometry3<f64>) -> Pose {
     )
 }
 
+/// A rapier vector in f64.
+fn vec_f64(v: Vector) -> Vector3<f64> {
+    Vector3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// A rapier pose in f64 (the inverse of [`pose_f32`]).
+fn pose_f64(p: &Pose) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        nalgebra::Translation3::from(vec_f64(p.translation)),
+        UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            p.rotation.w as f64,
+            p.rotation.x as f64,
+            p.rotation.y as f64,
+            p.rotation.z as f64,
+        )),
+    )
+}
+
 /// A narrow phase with the contact check of [`HullContactDispatcher`] when
 /// `contacts.check_normals` is on, parry's contacts as they are otherwise.
 fn narrow_phase(cfg: &SimConfig) -> NarrowPhase {
@@ -1241,10 +1259,7 @@ impl HandSim {
         self.sets
             .bodies
             .get(self.object_body)
-            .map(|rb| {
-                let t = rb.translation();
-                Vector3::new(t.x as f64, t.y as f64, t.z as f64)
-            })
+            .map(|rb| vec_f64(rb.translation()))
             .unwrap_or_else(Vector3::zeros)
     }
 
@@ -1346,19 +1361,9 @@ impl HandSim {
             .position(|j| j.child == link)
             .and_then(|ji| self.robot.hand.joints.iter().position(|&x| x == ji))?;
         let l = mb.link(self.joints[hj].link)?;
-        let p = self.sets.bodies.get(l.rigid_body_handle())?.position();
-        let t = nalgebra::Translation3::new(
-            p.translation.x as f64,
-            p.translation.y as f64,
-            p.translation.z as f64,
-        );
-        let r = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-            p.rotation.w as f64,
-            p.rotation.x as f64,
-            p.rotation.y as f64,
-            p.rotation.z as f64,
-        ));
-        Some(Isometry3::from_parts(t, r))
+        Some(pose_f64(
+            self.sets.bodies.get(l.rigid_body_handle())?.position(),
+        ))
     }
 
     fn multibody(&self) -> Option<&Multibody> {
@@ -1399,22 +1404,10 @@ impl HandSim {
             .sets
             .bodies
             .get(self.sets.colliders.get(palm)?.parent()?)?;
-        let v3 = |v: Vector| Vector3::new(v.x as f64, v.y as f64, v.z as f64);
-        let iso = |p: &Pose| {
-            Isometry3::from_parts(
-                nalgebra::Translation3::from(v3(p.translation)),
-                UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-                    p.rotation.w as f64,
-                    p.rotation.x as f64,
-                    p.rotation.y as f64,
-                    p.rotation.z as f64,
-                )),
-            )
-        };
         let near = |h: ColliderHandle| -> Option<(Point3<f64>, Point3<f64>)> {
             let c = self.collider_world_pose(h)?.translation;
             let p = obj.shape().project_point(&obj_pose, c, false).point;
-            Some((Point3::from(v3(c)), Point3::from(v3(p))))
+            Some((Point3::from(vec_f64(c)), Point3::from(vec_f64(p))))
         };
         let mut nearest = [(Point3::origin(), Point3::origin()); 6];
         for (f, n) in nearest.iter_mut().enumerate() {
@@ -1426,10 +1419,10 @@ impl HandSim {
             *n = near(h)?;
         }
         Some(CriticGeometry {
-            palm: iso(palm_body.position()),
-            object: iso(rb.position()),
-            object_linvel: v3(rb.linvel()),
-            object_angvel: v3(rb.angvel()),
+            palm: pose_f64(palm_body.position()),
+            object: pose_f64(rb.position()),
+            object_linvel: vec_f64(rb.linvel()),
+            object_angvel: vec_f64(rb.angvel()),
             nearest,
         })
     }
