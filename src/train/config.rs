@@ -640,6 +640,12 @@ mod tests {
                 "`randomization.friction` has 3 numbers",
             ),
             ("[env.randomization]\nsize_scale = [1.0]\n", "size_scale"),
+            ("[env.action]\ngrip_scale = 1.5\n", "action.grip_scale"),
+            (
+                "[env.reward]\ndisplacement_weight = -1.0\n",
+                "reward.displacement_weight",
+            ),
+            ("[env]\nmodality = \"M4\"\n", "M3G"),
         ] {
             let e = TrainConfig::parse(p, text).unwrap_err().to_string();
             assert!(e.contains(field) && e.contains("x.toml"), "{text}: {e}");
