@@ -19,6 +19,8 @@ use std::sync::Arc;
 const POLICY: &str = "assets/policies/quick_gru_m3_pca5";
 /// The shipped M3G policy (surface vectors from the object's cloud).
 const M3G_POLICY: &str = "assets/policies/ship_gru_m3g_pca5";
+/// The main job's policy: M3 with the grip component (6 + 2 continuous actions).
+const GRIP_POLICY: &str = "assets/policies/grip_gru_m3_pca5";
 
 fn sim_arm(cfg: SimBackendConfig) -> SimHandArm {
     let robot = Robot::builtin(Side::Left);
@@ -354,6 +356,50 @@ fn the_m3g_policy_grasps_on_the_cameras_cloud_and_refuses_a_grasp_without_one() 
     ]);
     assert!(!ok);
     assert!(err.contains("M3G") && err.contains("--cloud"), "{err}");
+}
+
+#[test]
+fn the_grip_policy_grasps_and_a_config_without_its_grip_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("grip.jsonl");
+    let log = log.to_str().unwrap();
+    for object in ["box", "cylinder_wood"] {
+        let (ok, v, err) = run_json(&[
+            "--policy",
+            GRIP_POLICY,
+            "--object",
+            object,
+            "--seed",
+            "1",
+            "--log",
+            log,
+        ]);
+        assert!(ok, "{err}");
+        assert_eq!(v["outcome"]["success"], true, "{object}: {v:#}");
+    }
+    // The same network beside a config without the grip: 5 synergies and the wrist give 7
+    // continuous actions, the network has 8.
+    let copy = dir.path().join("policy");
+    std::fs::create_dir(&copy).unwrap();
+    for f in ["checkpoint.safetensors", "synergy.json"] {
+        std::fs::copy(Path::new(GRIP_POLICY).join(f), copy.join(f)).unwrap();
+    }
+    let cfg = std::fs::read_to_string(Path::new(GRIP_POLICY).join("config.toml")).unwrap();
+    let cfg = cfg.replace("grip_scale = 0.5", "grip_scale = 0.0");
+    std::fs::write(copy.join("config.toml"), cfg).unwrap();
+    let (ok, _, err) = run_json(&[
+        "--policy",
+        copy.to_str().unwrap(),
+        "--object",
+        "box",
+        "--log",
+        log,
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("5 synergy components (7 continuous actions)") && err.contains("acts in 8"),
+        "{err}"
+    );
 }
 
 #[test]

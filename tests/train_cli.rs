@@ -412,6 +412,10 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
                 assert_eq!(g.action.grip_scale, 1.0);
                 g.action.grip_scale = 0.0;
             }
+            "grip_half" => {
+                assert_eq!(g.action.grip_scale, 0.5);
+                g.action.grip_scale = 0.0;
+            }
             "displacement" => {
                 assert_eq!(g.reward.displacement_weight, 10.0);
                 g.reward.displacement_weight = 0.0;
@@ -429,7 +433,16 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
         assert_eq!(c, ship, "{file}.toml changes more than its lever");
         n += 1;
     }
-    assert_eq!(n, 6);
+    assert_eq!(n, 7);
+    // The main job (quick.toml) is the grip_half lever's recipe; only its name, its time
+    // cap and how often it redraws the curve differ.
+    let mut quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
+    let half = TrainConfig::load(&dir.join("levers/grip_half.toml")).unwrap();
+    assert_eq!(quick.time_budget_minutes, Some(15.0));
+    quick.name = half.name.clone();
+    quick.time_budget_minutes = half.time_budget_minutes;
+    quick.plot_every = half.plot_every;
+    assert_eq!(quick, half, "quick.toml differs from levers/grip_half.toml");
 }
 
 #[test]

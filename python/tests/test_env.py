@@ -230,16 +230,25 @@ def test_shipped_policy_and_baselines():
         grasp_rl.Policy(ROOT / "configs")
 
 
-def test_the_m3g_policy_runs_in_its_own_setup():
-    # The shipped M3G policy (surface vectors from the object's mesh) acts on the env its
-    # config describes: the observation sizes agree and episodes repeat exactly.
-    p = grasp_rl.Policy(ROOT / "assets/policies/ship_gru_m3g_pca5")
+@pytest.mark.parametrize(
+    "policy, n_actions",
+    [
+        # M3G: surface vectors from the object's mesh; the paper's 5 + 2 + lift actions.
+        ("ship_gru_m3g_pca5", 8),
+        # The main job's policy: M3 and the grip, one action more than the paper's.
+        ("grip_gru_m3_pca5", 9),
+    ],
+)
+def test_shipped_policies_run_in_their_own_setup(policy, n_actions):
+    # Each shipped policy acts on the env its config describes: the observation and
+    # action sizes agree and episodes repeat exactly.
+    p = grasp_rl.Policy(ROOT / "assets/policies" / policy)
     e = grasp_rl.GraspEnv(config_toml=p.config_toml, objects=OBJECTS, difficulty=1.0)
     assert e.observation_space.shape == (p.obs_dim,)
+    assert e.action_space.shape == (n_actions,)
     successes = 0
     for seed in range(4):
         ep = grasp_rl.run_episode(e, p, scene_seed=seed)
         assert grasp_rl.run_episode(e, p, scene_seed=seed) == ep
         successes += ep["success"]
     assert successes >= 2
-

@@ -508,20 +508,23 @@ impl PolicyRunner {
                 spec.continuous, spec.lift
             )));
         }
-        let n = spec.continuous - 2;
         let cfg_path = dir.join("config.toml");
-        let env = if cfg_path.is_file() {
+        let (env, n) = if cfg_path.is_file() {
             let c = crate::train::config::TrainConfig::load(&cfg_path)
                 .map_err(|e| perr(e.to_string()))?;
-            if c.n_components != n {
+            // n synergies, the wrist's two increments and, with the grip, one more.
+            let n = c.n_components;
+            let expected = c.env.grasp.action.continuous(n);
+            if spec.continuous != expected {
                 return Err(perr(format!(
-                    "config.toml says {} synergy components but the network acts in {n}",
-                    c.n_components
+                    "config.toml says {n} synergy components{} ({expected} continuous actions) but the network acts in {}",
+                    if c.env.grasp.action.grip_scale > 0.0 { " and a grip" } else { "" },
+                    spec.continuous
                 )));
             }
-            c.env.grasp
+            (c.env.grasp, n)
         } else {
-            EnvConfig::default()
+            (EnvConfig::default(), spec.continuous - 2)
         };
         env.validate().map_err(|e| perr(e.to_string()))?;
         let syn_path = dir.join("synergy.json");
