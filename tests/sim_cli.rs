@@ -249,3 +249,39 @@ fn bench_env_splits_the_episodes_into_phases() {
     assert!(ok, "{err}");
     assert!(out.contains("physics steps per episode"), "{out}");
 }
+
+#[test]
+fn the_antipodal_pregrasp_starts_every_agent_from_a_plan() {
+    // Two agents on the sugar box: every episode of each starts from an antipodal plan on
+    // the simulated depth cloud, and both see the same starts (the JSON has 2 trials each).
+    let (ok, out, err) = grasp(&[
+        "--seed",
+        "0",
+        "--json",
+        "eval",
+        "--policy",
+        "baseline1,baseline2",
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "2",
+        "--pregrasp",
+        "antipodal",
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(
+        err.matches("pre-grasp: 2 episodes from an antipodal plan, 0 at the default placement")
+            .count(),
+        2,
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for agent in v.as_array().unwrap() {
+        assert_eq!(agent["objects"][0]["trials"], 2);
+    }
+    let (ok, _, err) = grasp(&["eval", "--policy", "baseline1", "--pregrasp", "sideways"]);
+    assert!(
+        !ok && err.contains("top-down") && err.contains("antipodal"),
+        "{err}"
+    );
+}

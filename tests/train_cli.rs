@@ -367,7 +367,19 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 13);
+    assert_eq!(n, 15);
+    // The modality ablation's arms: the main job with another modality, nothing else.
+    let quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
+    for (file, m) in [
+        ("quick_m1.toml", grasp::env::obs::Modality::M1),
+        ("quick_m2.toml", grasp::env::obs::Modality::M2),
+    ] {
+        let mut c = TrainConfig::load(&dir.join(file)).unwrap();
+        assert_eq!(c.env.grasp.modality, m, "{file}");
+        c.env.grasp.modality = quick.env.grasp.modality;
+        c.name = quick.name.clone();
+        assert_eq!(c, quick, "{file}");
+    }
     let stream = TrainConfig::load(&dir.join("stream.toml")).unwrap();
     assert_eq!(stream.objects, "procedural");
     assert!(stream.env.grasp.randomization.enabled);

@@ -4,8 +4,9 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use grasp::env::api::Env;
 use grasp::env::curriculum::CurriculumConfig;
-use grasp::env::grasp::{EnvConfig, GraspEnv};
+use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
+use grasp::env::pregrasp::{PlannedGrasp, PregraspPlanner};
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{write_index, RecordOptions};
 use grasp::eval::{
@@ -13,9 +14,12 @@ use grasp::eval::{
     physics_line, read_results, AgentResult, AgentSpec,
 };
 use grasp::robot::{Robot, Side};
-use grasp::sim::SimConfig;
+use grasp::run::pregrasp::AntipodalPregrasp;
+use grasp::sim::{HandSim, SimConfig};
 use grasp::util::fsx::write_atomic;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 
 use super::rollout::{load_synergy, sim_objects, threads};
 use super::Global;
@@ -32,7 +36,7 @@ pub struct EvalArgs {
     pub policy: Vec<String>,
     /// Read the results of an earlier `grasp eval --json` from this file instead of
     /// evaluating: print, compare and plot them again.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp"])]
     pub from_json: Option<PathBuf>,
     /// Draw the per-object success of every agent (Wilson 95 % intervals, means) to this
     /// SVG file.
@@ -88,8 +92,38 @@ pub struct EvalArgs {
     /// Worker threads (default: available cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Where every agent's hand starts: `top-down` over the object's centre, 1 cm below
+    /// its top (the training placement), or `antipodal`, the pre-grasp `grasp run` plans:
+    /// the best top-down antipodal grasp on the simulated depth cloud of the object at
+    /// rest (the default placement where the sampler finds none).
+    #[arg(long, value_enum, default_value_t = Placement::TopDown)]
+    pub pregrasp: Placement,
     #[command(flatten)]
     pub rec: super::RecordArgs,
+}
+
+/// Where an episode's hand starts (`--pregrasp`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Placement {
+    /// Over the object's centre, `grasp_depth` below its top.
+    TopDown,
+    /// `grasp run`'s antipodal pre-grasp on the simulated depth cloud.
+    Antipodal,
+}
+
+/// The antipodal planner, counting the episodes it placed and those it left at the
+/// default placement (shared by one agent's workers).
+struct CountedPregrasp {
+    inner: AntipodalPregrasp,
+    counts: Arc<[AtomicUsize; 2]>,
+}
+
+impl PregraspPlanner for CountedPregrasp {
+    fn plan(&mut self, sim: &HandSim, seed: u64) -> Option<PlannedGrasp> {
+        let p = self.inner.plan(sim, seed);
+        self.counts[usize::from(p.is_none())].fetch_add(1, Ordering::Relaxed);
+        p
+    }
 }
 
 /// The agent named by one `--policy` value; checkpoints act by sampling when `stochastic`.
@@ -388,14 +422,22 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     let n_threads = threads(a.threads)?;
     let mut results = Vec::new();
     for ag in &agents {
+        let counts: Arc<[AtomicUsize; 2]> = Arc::new(Default::default());
         let make_env = |o: usize| {
-            GraspEnv::new(
+            let env = GraspEnv::new(
                 &robot,
                 vec![objects[o].clone()],
                 ag.model.clone(),
                 sim_cfg.clone(),
                 ag.env.clone(),
-            )
+            )?;
+            Ok::<_, GraspEnvError>(match a.pregrasp {
+                Placement::TopDown => env,
+                Placement::Antipodal => env.with_pregrasp(Box::new(CountedPregrasp {
+                    inner: AntipodalPregrasp::default(),
+                    counts: counts.clone(),
+                })),
+            })
         };
         // A checkpoint must match the observation layout it will see.
         if let Some(dir) = ag.spec.checkpoint() {
@@ -431,6 +473,12 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             &ag.spec,
             record.as_ref(),
         )?);
+        if a.pregrasp == Placement::Antipodal && !g.quiet {
+            let [planned, fallback] = [0, 1].map(|k| counts[k].load(Ordering::Relaxed));
+            eprintln!(
+                "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no top-down candidate)"
+            );
+        }
     }
     if let Some(r) = &record {
         let entries: Vec<_> = results.iter().flat_map(|r| r.recordings.clone()).collect();

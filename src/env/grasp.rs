@@ -30,6 +30,7 @@ use super::curriculum::{Curriculum, CurriculumConfig};
 use super::object_curriculum::{ObjectCurriculum, ObjectCurriculumConfig};
 use super::obs::{surface_vectors, FrameStack, Modality, ObsLayout, N_SURFACE};
 use super::phases::{Phase, PhaseTally};
+use super::pregrasp::{PlannedGrasp, PregraspPlanner};
 use super::randomize::Randomization;
 use super::reward::{self, RewardConfig};
 use super::stream::{ObjectStream, StreamConfig};
@@ -301,6 +302,8 @@ pub struct GraspEnv {
     last: Option<EpisodeSummary>,
     /// Physics steps and wall time per episode phase, over all episodes.
     phases: PhaseTally,
+    /// The planner of the hand's start, when not the default top-down placement.
+    pregrasp: Option<Box<dyn PregraspPlanner>>,
     done: bool,
 }
 
@@ -354,8 +357,16 @@ impl GraspEnv {
             lift_grip: None,
             last: None,
             phases: PhaseTally::default(),
+            pregrasp: None,
             done: true,
         })
+    }
+
+    /// Starts every episode (policy and baseline alike) from `planner`'s placement
+    /// instead of the default top-down one (see [`super::pregrasp`]).
+    pub fn with_pregrasp(mut self, planner: Box<dyn PregraspPlanner>) -> Self {
+        self.pregrasp = Some(planner);
+        self
     }
 
     /// Switches the environment to the procedural object stream: from the next reset on,
@@ -472,6 +483,17 @@ impl GraspEnv {
         // The hand starts clear of the object: where the start posture would overlap a
         // large object, the hand is raised in 5 mm steps (at most 10 cm).
         self.sim.reset(&scene)?;
+        if let Some(planner) = self.pregrasp.as_mut() {
+            // No plan (or a non-finite one): the default placement stands.
+            if let Some(g) = planner
+                .plan(&self.sim, seed)
+                .filter(PlannedGrasp::is_finite)
+            {
+                scene.grasp_point = g.grasp_point;
+                scene.hand_yaw = g.hand_yaw;
+                self.sim.reset(&scene)?;
+            }
+        }
         for _ in 0..CLEARANCE_STEPS {
             if !self.sim.hand_overlaps_object() {
                 break;
@@ -928,6 +950,73 @@ mod tests {
             b.closing.physics_steps + b.lift.physics_steps,
             env.sim.physics_steps()
         );
+    }
+
+    /// A planner that always returns `plan`.
+    struct Fixed(Option<PlannedGrasp>);
+
+    impl PregraspPlanner for Fixed {
+        fn plan(&mut self, _sim: &HandSim, _seed: u64) -> Option<PlannedGrasp> {
+            self.0
+        }
+    }
+
+    #[test]
+    fn a_pregrasp_plan_places_the_hand_and_no_plan_keeps_the_default() {
+        // The default placement puts the grasp point on the box's axis at yaw 0; a plan
+        // 3 cm along x and 5 cm higher at the same yaw moves the palm by exactly that;
+        // a NaN plan or none leaves the default placement.
+        let robot = Robot::builtin(Side::Left);
+        let env = |planner: Option<Fixed>| {
+            let objects = vec![("box".to_string(), ObjectSpec::default_box())];
+            let e = GraspEnv::new(
+                &robot,
+                objects,
+                crate::synergy::default_model(),
+                SimConfig::default(),
+                EnvConfig::default(),
+            )
+            .expect("env");
+            match planner {
+                Some(p) => e.with_pregrasp(Box::new(p)),
+                None => e,
+            }
+        };
+        let palm = |e: &mut GraspEnv| {
+            e.reset_scene(3).expect("scene");
+            e.sim.critic_geometry().expect("geometry").palm
+        };
+        let mut plain = env(None);
+        let p0 = palm(&mut plain);
+        let scene = Scene::top_down(
+            &ObjectSpec::default_box(),
+            plain.path.start(),
+            plain.cfg.grasp_depth,
+            0.0,
+        );
+        let g = scene.grasp_point;
+        // 5 cm higher as well, clear of the box (no raise for clearance).
+        let moved = Fixed(Some(PlannedGrasp {
+            grasp_point: [g[0] + 0.03, g[1], g[2] + 0.05],
+            hand_yaw: 0.0,
+        }));
+        let p1 = palm(&mut env(Some(moved)));
+        let d = p1.translation.vector - p0.translation.vector;
+        assert!(
+            (d - nalgebra::Vector3::new(0.03, 0.0, 0.05)).norm() < 1e-5,
+            "{d}"
+        );
+        assert!(p1.rotation.angle_to(&p0.rotation) < 1e-5);
+        for none in [
+            Fixed(None),
+            Fixed(Some(PlannedGrasp {
+                grasp_point: [f64::NAN, 0.0, 0.1],
+                hand_yaw: 0.0,
+            })),
+        ] {
+            let p = palm(&mut env(Some(none)));
+            assert!((p.translation.vector - p0.translation.vector).norm() < 1e-9);
+        }
     }
 
     #[test]

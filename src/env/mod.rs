@@ -10,6 +10,7 @@
 //! - [`curriculum`]: eq. 6.
 //! - [`randomize`]: per-episode domain randomisation (object and sensor noise).
 //! - [`stream`]: training on the procedural object stream.
+//! - [`pregrasp`]: planned hand placements (the hook `grasp eval --pregrasp` uses).
 //! - [`grasp`]: the grasping environment (stages 1 and 2, lift) and the scripted baselines.
 //! - [`cartpole`]: continuous CartPole, the learner's textbook check.
 
@@ -23,6 +24,7 @@ pub mod grasp;
 pub mod object_curriculum;
 pub mod obs;
 pub mod phases;
+pub mod pregrasp;
 pub mod randomize;
 pub mod reward;
 pub mod stream;

@@ -366,7 +366,7 @@ fn solve_arm(
 
 /// Makes a candidate exactly top-down (approach -z, horizontal closing direction) if it is
 /// within `max_tilt` of it.
-fn snap_top_down(g: &TwoFingerGrasp, max_tilt: f64) -> Option<TwoFingerGrasp> {
+pub(crate) fn snap_top_down(g: &TwoFingerGrasp, max_tilt: f64) -> Option<TwoFingerGrasp> {
     let a = g.approach.try_normalize(1e-9)?;
     if a.angle(&-Vector3::z()) > max_tilt {
         return None;
