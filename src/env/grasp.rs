@@ -910,6 +910,18 @@ mod tests {
     use super::*;
     use crate::robot::Side;
 
+    /// The default environment on the default box alone.
+    fn box_env() -> GraspEnv {
+        GraspEnv::new(
+            &Robot::builtin(Side::Left),
+            vec![("box".to_string(), ObjectSpec::default_box())],
+            crate::synergy::default_model(),
+            SimConfig::default(),
+            EnvConfig::default(),
+        )
+        .expect("env")
+    }
+
     #[test]
     fn each_phase_counts_its_own_physics_steps() {
         let robot = Robot::builtin(Side::Left);
@@ -966,21 +978,9 @@ mod tests {
         // The default placement puts the grasp point on the box's axis at yaw 0; a plan
         // 3 cm along x and 5 cm higher at the same yaw moves the palm by exactly that;
         // a NaN plan or none leaves the default placement.
-        let robot = Robot::builtin(Side::Left);
-        let env = |planner: Option<Fixed>| {
-            let objects = vec![("box".to_string(), ObjectSpec::default_box())];
-            let e = GraspEnv::new(
-                &robot,
-                objects,
-                crate::synergy::default_model(),
-                SimConfig::default(),
-                EnvConfig::default(),
-            )
-            .expect("env");
-            match planner {
-                Some(p) => e.with_pregrasp(Box::new(p)),
-                None => e,
-            }
+        let env = |planner: Option<Fixed>| match planner {
+            Some(p) => box_env().with_pregrasp(Box::new(p)),
+            None => box_env(),
         };
         let palm = |e: &mut GraspEnv| {
             e.reset_scene(3).expect("scene");
@@ -1142,16 +1142,7 @@ mod tests {
 
     #[test]
     fn a_refused_scene_ends_as_a_reported_failure() {
-        let robot = Robot::builtin(Side::Left);
-        let objects = vec![("box".to_string(), ObjectSpec::default_box())];
-        let mut env = GraspEnv::new(
-            &robot,
-            objects,
-            crate::synergy::default_model(),
-            SimConfig::default(),
-            EnvConfig::default(),
-        )
-        .expect("env");
+        let mut env = box_env();
         // One ordinary episode leaves a world behind.
         env.reset(1);
         let n = env.action_spec().continuous;
