@@ -11,6 +11,7 @@
 //! episode count) by [`episode_seed`], so results do not depend on the number of threads.
 
 use rayon::prelude::*;
+use std::sync::{Mutex, PoisonError};
 
 /// The shape of an environment's action.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -201,6 +202,35 @@ struct Slot {
     length: u64,
 }
 
+/// What stepping one environment returns: the step, the final observation of an
+/// episode that ended (the step's observation is then the next episode's first), and its
+/// record.
+type Out = (Step, Option<Vec<f32>>, Option<EpisodeRecord>);
+
+/// Steps environment `i` with `a`, resetting it (seeded from `base`) when its episode ends.
+fn step_slot(s: &mut Slot, i: usize, a: &Action, base: u64) -> Out {
+    let mut st = s.env.step(a);
+    s.ret += f64::from(st.reward);
+    s.length += 1;
+    if st.terminated || st.truncated {
+        let rec = EpisodeRecord {
+            env_index: i,
+            ret: s.ret,
+            length: s.length,
+            success: st.info.success,
+            physics_failure: st.info.physics_failure,
+        };
+        s.episode += 1;
+        s.ret = 0.0;
+        s.length = 0;
+        let first = s.env.reset(episode_seed(base, i, s.episode));
+        let last = std::mem::replace(&mut st.obs, first);
+        (st, Some(last), Some(rec))
+    } else {
+        (st, None, None)
+    }
+}
+
 /// A vector of environments stepped in parallel with automatic reset.
 pub struct VecEnv {
     slots: Vec<Slot>,
@@ -330,36 +360,27 @@ impl VecEnv {
             }
         }
         let base = self.base_seed;
-        type Out = (Step, Option<Vec<f32>>, Option<EpisodeRecord>);
-        let results: Vec<Out> = self.pool.install(|| {
-            self.slots
-                .par_iter_mut()
-                .zip(actions.par_iter())
-                .enumerate()
-                .map(|(i, (s, a))| {
-                    let mut st = s.env.step(a);
-                    s.ret += f64::from(st.reward);
-                    s.length += 1;
-                    if st.terminated || st.truncated {
-                        let rec = EpisodeRecord {
-                            env_index: i,
-                            ret: s.ret,
-                            length: s.length,
-                            success: st.info.success,
-                            physics_failure: st.info.physics_failure,
-                        };
-                        s.episode += 1;
-                        s.ret = 0.0;
-                        s.length = 0;
-                        let first = s.env.reset(episode_seed(base, i, s.episode));
-                        let last = std::mem::replace(&mut st.obs, first);
-                        (st, Some(last), Some(rec))
-                    } else {
-                        (st, None, None)
-                    }
-                })
-                .collect()
+        // One shared queue, longest jobs first: a lift ends its episode, and its
+        // environment then resets and runs stage 1 in the same job (several control
+        // steps' physics). Each pool thread takes the next job when it is free, so the
+        // long jobs do not end up together at the end of one thread's share.
+        let n = self.slots.len();
+        let mut jobs: Vec<(usize, &mut Slot)> = self.slots.iter_mut().enumerate().collect();
+        jobs.sort_by_key(|(i, _)| !actions[*i].lift);
+        let queue = Mutex::new(jobs.into_iter());
+        let done: Mutex<Vec<(usize, Out)>> = Mutex::new(Vec::with_capacity(n));
+        self.pool.broadcast(|_| loop {
+            let Some((i, s)) = queue.lock().unwrap_or_else(PoisonError::into_inner).next() else {
+                break;
+            };
+            let out = step_slot(s, i, &actions[i], base);
+            done.lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .push((i, out));
         });
+        let mut done = done.into_inner().unwrap_or_else(PoisonError::into_inner);
+        done.sort_by_key(|(i, _)| *i);
+        let results: Vec<Out> = done.into_iter().map(|(_, out)| out).collect();
         let n = results.len();
         let mut out = VecStep {
             obs: Vec::with_capacity(n * self.obs_dim),
@@ -515,6 +536,39 @@ mod tests {
         assert_eq!(r1, r2);
         // env 0 (len 2) finished 3 episodes, env 1 (len 3) 2, env 2 (len 4) 1.
         assert_eq!(r1.len(), 6);
+    }
+
+    #[test]
+    fn lifts_run_first_but_results_stay_in_environment_order() {
+        // The queue hands out lift actions first; every output still belongs to its
+        // environment, whatever the lift flags (Counter ignores them).
+        let step = |lifts: [bool; 4], threads: usize| {
+            let mut v = VecEnv::new(counters(&[2, 3, 4, 5]), threads, 3).unwrap();
+            v.reset(3).unwrap();
+            let act: Vec<Action> = (0..4)
+                .map(|i| Action {
+                    cont: vec![i as f32 + 1.0],
+                    lift: lifts[i],
+                })
+                .collect();
+            let steps: Vec<VecStep> = (0..3).map(|_| v.step(&act).unwrap()).collect();
+            (
+                steps.iter().map(|s| s.rewards.clone()).collect::<Vec<_>>(),
+                steps.iter().map(|s| s.obs.clone()).collect::<Vec<_>>(),
+                v.drain_finished(),
+            )
+        };
+        let plain = step([false; 4], 1);
+        assert_eq!(plain.0[0], vec![1.0, 2.0, 3.0, 4.0]);
+        for threads in [1, 2, 4] {
+            assert_eq!(step([false, true, false, true], threads), plain);
+            assert_eq!(step([true, true, true, false], threads), plain);
+        }
+        // env 0 ended at step 2, env 1 at step 3: drained in environment order.
+        assert_eq!(
+            plain.2.iter().map(|r| r.env_index).collect::<Vec<_>>(),
+            vec![0, 1]
+        );
     }
 
     #[test]

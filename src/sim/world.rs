@@ -1165,45 +1165,58 @@ impl HandSim {
             return Some(PhysicsFailure::ObjectLost { distance });
         }
         let max_penetration = f.max_penetration;
-        let deepest = self.deepest_object_contact();
-        if let Some(c) = deepest {
-            if self.deepest.as_ref().is_none_or(|d| c.depth > d.depth) {
-                self.deepest = Some(c.clone());
-            }
-            if c.depth > max_penetration {
-                return Some(PhysicsFailure::DeepPenetration {
-                    depth: c.depth,
-                    with: c.with,
-                    part: c.part,
-                });
-            }
+        // Named (an allocation) only when it is the deepest so far or a failure.
+        let (depth, other, sub) = self.deepest_object_pair()?;
+        let deeper = self.deepest.as_ref().is_none_or(|d| depth > d.depth);
+        if !deeper && depth <= max_penetration {
+            return None;
         }
-        None
+        let c = self.object_contact(depth, other, sub);
+        if deeper {
+            self.deepest = Some(c.clone());
+        }
+        (c.depth > max_penetration).then_some(PhysicsFailure::DeepPenetration {
+            depth: c.depth,
+            with: c.with,
+            part: c.part,
+        })
     }
 
     /// The object's deepest penetrating contact in the current step, with what it touched.
+    #[cfg(test)]
     fn deepest_object_contact(&self) -> Option<ObjectContact> {
-        let mut best: Option<ObjectContact> = None;
+        let (depth, other, sub) = self.deepest_object_pair()?;
+        Some(self.object_contact(depth, other, sub))
+    }
+
+    /// [`HandSim::deepest_object_contact`] unnamed: its depth, the collider the object
+    /// touched and the object's part.
+    fn deepest_object_pair(&self) -> Option<(f64, ColliderHandle, u32)> {
+        let mut best: Option<(f64, ColliderHandle, u32)> = None;
         for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
             let Some((m, depth)) = self.pair_depth(pair) else {
                 continue;
             };
-            if depth <= 0.0 || best.as_ref().is_some_and(|b| b.depth >= depth) {
+            if depth <= 0.0 || best.is_some_and(|b| b.0 >= depth) {
                 continue;
             }
-            let (other, sub) = if pair.collider1 == self.object_collider {
-                (pair.collider2, m.subshape1)
+            best = Some(if pair.collider1 == self.object_collider {
+                (depth, pair.collider2, m.subshape1)
             } else {
-                (pair.collider1, m.subshape2)
-            };
-            best = Some(ObjectContact {
-                depth,
-                with: self.collider_name(other),
-                part: (self.object.shape.part_count() > 1).then_some(sub as usize),
-                step: self.physics_steps,
+                (depth, pair.collider1, m.subshape2)
             });
         }
         best
+    }
+
+    /// The object's contact of `depth` with collider `other` on its part `sub`, named.
+    fn object_contact(&self, depth: f64, other: ColliderHandle, sub: u32) -> ObjectContact {
+        ObjectContact {
+            depth,
+            with: self.collider_name(other),
+            part: (self.object.shape.part_count() > 1).then_some(sub as usize),
+            step: self.physics_steps,
+        }
     }
 
     /// The deepest penetration (m) of a contact pair's manifolds at the current poses
@@ -1217,7 +1230,7 @@ impl HandSim {
         let at =
             |co: &Collider, sub: Option<&Pose>| sub.map_or(*co.position(), |p| *co.position() * *p);
         let mut best: Option<(&ContactManifold, f64)> = None;
-        for m in pair.manifolds() {
+        for m in pair.manifolds().iter().filter(|m| !m.points.is_empty()) {
             let pos12 = at(co1, m.subshape_pos1()).inverse() * at(co2, m.subshape_pos2());
             let depth = m
                 .points

@@ -543,6 +543,12 @@ impl TrainSession {
                 break;
             }
             let m = self.trainer.train_update()?;
+            tracing::debug!(
+                update = m.update,
+                rollout_s = m.rollout_secs,
+                optimize_s = m.optimize_secs,
+                "update timing"
+            );
             let row = self.row_from(&m, self.wall_offset + start.elapsed().as_secs_f64());
             self.rows.push(row);
             self.write_logs()?;
