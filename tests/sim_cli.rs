@@ -278,6 +278,10 @@ fn the_antipodal_pregrasp_starts_every_agent_from_a_plan() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     for agent in v.as_array().unwrap() {
         assert_eq!(agent["objects"][0]["trials"], 2);
+        // The saved results say where the hands started.
+        assert_eq!(agent["pregrasp"]["placement"], "antipodal", "{agent}");
+        assert_eq!(agent["pregrasp"]["planned"], 2);
+        assert_eq!(agent["pregrasp"]["default_placement"], 0);
     }
     let (ok, _, err) = grasp(&["eval", "--policy", "baseline1", "--pregrasp", "sideways"]);
     assert!(

@@ -11,7 +11,7 @@ use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{write_index, RecordOptions};
 use grasp::eval::{
     checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
-    physics_line, read_results, AgentResult, AgentSpec,
+    physics_line, read_results, AgentResult, AgentSpec, PregraspStats,
 };
 use grasp::robot::{Robot, Side};
 use grasp::run::pregrasp::AntipodalPregrasp;
@@ -473,11 +473,20 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             &ag.spec,
             record.as_ref(),
         )?);
-        if a.pregrasp == Placement::Antipodal && !g.quiet {
+        if a.pregrasp == Placement::Antipodal {
             let [planned, fallback] = [0, 1].map(|k| counts[k].load(Ordering::Relaxed));
-            eprintln!(
-                "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no top-down candidate)"
-            );
+            if let Some(r) = results.last_mut() {
+                r.pregrasp = Some(PregraspStats {
+                    placement: "antipodal".into(),
+                    planned,
+                    default_placement: fallback,
+                });
+            }
+            if !g.quiet {
+                eprintln!(
+                    "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no top-down candidate)"
+                );
+            }
         }
     }
     if let Some(r) = &record {

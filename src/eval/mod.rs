@@ -316,9 +316,25 @@ pub struct AgentResult {
     pub lifts: LiftStats,
     /// Wall time (s).
     pub wall_s: f64,
+    /// Where the hands started when not at the default top-down placement (`grasp eval
+    /// --pregrasp antipodal`); absent for the default placement and in evaluations saved
+    /// before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pregrasp: Option<PregraspStats>,
     /// Episodes recorded (with `record`), per object then trial.
     #[serde(skip_serializing_if = "Vec::is_empty", skip_deserializing)]
     pub recordings: Vec<RecordingEntry>,
+}
+
+/// Where an agent's hands started when a pre-grasp planner placed them.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PregraspStats {
+    /// The planner (`antipodal`).
+    pub placement: String,
+    /// Episodes the planner placed.
+    pub planned: usize,
+    /// Episodes left at the default placement (the planner found no grasp).
+    pub default_placement: usize,
 }
 
 /// How an agent's lifts were made, over the episodes that lifted: the learned-grasp
@@ -575,6 +591,7 @@ pub fn evaluate(
         mean_steps: steps_all as f64 / n_all.max(1) as f64,
         control_steps_per_s: steps_all as f64 / wall_s.max(1e-9),
         wall_s,
+        pregrasp: None,
         objects,
         recordings,
     })
@@ -964,6 +981,7 @@ mod tests {
             over_1cm_by_body: Default::default(),
             lifts: LiftStats::default(),
             wall_s: 1.0,
+            pregrasp: None,
             recordings: Vec::new(),
         };
         let md = markdown_table(std::slice::from_ref(&r));
@@ -1023,6 +1041,7 @@ mod tests {
             over_1cm_by_body: [("lh_ffdistal".to_string(), 1)].into(),
             lifts: LiftStats::default(),
             wall_s: 1.0,
+            pregrasp: None,
             recordings: Vec::new(),
         };
         assert_eq!(over_1cm_by_body(&r.objects), r.over_1cm_by_body);

@@ -166,6 +166,7 @@ mod tests {
             over_1cm_by_body: Default::default(),
             lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
+            pregrasp: None,
             recordings: Vec::new(),
         }
     }
