@@ -1189,8 +1189,9 @@ impl HandSim {
         Some(self.object_contact(depth, other, sub))
     }
 
-    /// [`HandSim::deepest_object_contact`] unnamed: its depth, the collider the object
-    /// touched and the object's part.
+    /// The object's deepest penetrating contact in the current step, unnamed: its depth,
+    /// the collider the object touched and the object's part (see
+    /// [`HandSim::object_contact`]).
     fn deepest_object_pair(&self) -> Option<(f64, ColliderHandle, u32)> {
         let mut best: Option<(f64, ColliderHandle, u32)> = None;
         for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
