@@ -602,6 +602,12 @@ impl Collider {
     ///
     /// This is the AABB used for collision detection (slightly larger than the visual shape).
     pub fn compute_collision_aabb(&self, prediction: Real) -> Aabb {
+        // Patched: a cylinder's box in closed form (parry's `Cylinder::aabb` makes six
+        // support-point queries; this runs for every moving collider every step).
+        #[cfg(feature = "dim3")]
+        if let Some(cylinder) = self.shape.as_cylinder() {
+            return cylinder_aabb(cylinder, &self.pos).loosened(self.contact_skin + prediction);
+        }
         self.shape
             .compute_aabb(&self.pos)
             .loosened(self.contact_skin + prediction)
@@ -1523,5 +1529,58 @@ impl ColliderBuilder {
 impl From<ColliderBuilder> for Collider {
     fn from(val: ColliderBuilder) -> Collider {
         val.build()
+    }
+}
+
+/// Patched: the world-space box of `cylinder` at `pos`, in closed form. Along each world
+/// axis `e_i` the cylinder (axis `a = R y`, half height `h`, radius `r`) reaches
+/// `h |a_i| + r sqrt(1 - a_i^2)` from its centre: the same box as parry's support-map
+/// `Cylinder::aabb`, whose support point toward `e_i` is the rim point `r (d_xz / |d_xz|)
+/// + h sign(d_y) y` of `d = R^T e_i` (so `d_y = a_i` and `|d_xz| = sqrt(1 - a_i^2)`).
+#[cfg(feature = "dim3")]
+pub(crate) fn cylinder_aabb(cylinder: &parry::shape::Cylinder, pos: &Pose) -> Aabb {
+    // `1 - a_i^2` summed from the rotation's other two columns: no cancellation when
+    // the axis is nearly aligned with a world axis.
+    let (x, axis, z) = (
+        pos.rotation * Vector::X,
+        pos.rotation * Vector::Y,
+        pos.rotation * Vector::Z,
+    );
+    let across = x * x + z * z;
+    let half = axis.abs() * cylinder.half_height
+        + Vector::new(across.x.sqrt(), across.y.sqrt(), across.z.sqrt()) * cylinder.radius;
+    Aabb::new(pos.translation - half, pos.translation + half)
+}
+
+#[cfg(all(test, feature = "dim3"))]
+mod cylinder_aabb_tests {
+    use super::cylinder_aabb;
+    use crate::math::{Pose, Rotation, Vector};
+    use parry::shape::Cylinder;
+
+    #[test]
+    fn closed_form_cylinder_box_is_parrys_support_map_box() {
+        let cylinder = Cylinder::new(0.02, 0.009);
+        let mut worst: f32 = 0.0;
+        for i in 0..200 {
+            let t = i as f32 * 0.37;
+            let axis = Vector::new(t.sin(), (1.3 * t).cos(), 0.5 + (0.7 * t).sin()).normalize();
+            let rotation = Rotation::from_axis_angle(axis, 0.9 * t);
+            let pos = Pose::from_parts(Vector::new(0.01, -0.02, 0.03), rotation);
+            let ours = cylinder_aabb(&cylinder, &pos);
+            let parry = cylinder.aabb(&pos);
+            // Half extents compared (the centre is the translation in both).
+            let (a, b) = (ours.half_extents(), parry.half_extents());
+            worst = worst.max((a - b).abs().max_element());
+            assert!((ours.center() - parry.center()).abs().max_element() < 1.0e-6);
+        }
+        assert!(worst < 1.0e-8, "largest difference {worst} m");
+        // Axis along world z: the box is the radius across and the half height along z.
+        let upright = Pose::from_parts(
+            Vector::ZERO,
+            Rotation::from_axis_angle(Vector::X, core::f32::consts::FRAC_PI_2),
+        );
+        let b = cylinder_aabb(&cylinder, &upright);
+        assert!((b.maxs - Vector::new(0.009, 0.009, 0.02)).abs().max_element() < 1.0e-6, "{b:?}");
     }
 }
