@@ -238,6 +238,12 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, PpoError> {
             state.format, state.version
         )));
     }
+    // The stored training config is input too: out-of-range settings (a corrupted
+    // policy setting would otherwise surface from the network builder, unnamed).
+    state
+        .config
+        .validate()
+        .map_err(|e| fmt_err(format!("stored training config: {e}")))?;
     let st = SafeTensors::deserialize(&bytes)
         .map_err(|e| fmt_err(format!("not a valid safetensors file ({e})")))?;
     let mut tensors = HashMap::new();
@@ -428,6 +434,49 @@ pub fn load_policy(dir: &Path) -> Result<LoadedPolicy, PpoError> {
 mod tests {
     use super::*;
     use rand::Rng;
+
+    /// The shipped checkpoint's bytes with the stored training config edited by `edit`.
+    fn with_edited_config(edit: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/policies/quick_gru_m3_pca5")
+            .join(CHECKPOINT_FILE);
+        let bytes = std::fs::read(path).unwrap();
+        let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+        let mut header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).unwrap();
+        let meta = &mut header["__metadata__"][META_KEY];
+        let mut state: serde_json::Value = serde_json::from_str(meta.as_str().unwrap()).unwrap();
+        edit(&mut state["config"]);
+        *meta = serde_json::Value::String(state.to_string());
+        let header = serde_json::to_vec(&header).unwrap();
+        let mut out = (header.len() as u64).to_le_bytes().to_vec();
+        out.extend_from_slice(&header);
+        out.extend_from_slice(&bytes[8 + n..]);
+        out
+    }
+
+    #[test]
+    fn an_out_of_range_stored_config_is_an_error_naming_the_file() {
+        // Found by tests/fuzz_parsers.rs: a corrupted `init_lift_bias` surfaced from the
+        // network builder without the file's name.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(CHECKPOINT_FILE);
+        std::fs::write(&path, with_edited_config(|_| {})).unwrap();
+        assert!(read_checkpoint(&path).is_ok(), "the unedited copy loads");
+        std::fs::write(
+            &path,
+            with_edited_config(|c| c["policy"]["init_lift_bias"] = (-1.0e5).into()),
+        )
+        .unwrap();
+        let text = read_checkpoint(&path).err().unwrap().to_string();
+        assert!(text.contains(CHECKPOINT_FILE), "{text}");
+        assert!(text.contains("init_lift_bias"), "{text}");
+        std::fs::write(&path, with_edited_config(|c| c["gamma"] = 3.0.into())).unwrap();
+        let text = load_policy(dir.path()).err().unwrap().to_string();
+        assert!(
+            text.contains(CHECKPOINT_FILE) && text.contains("gamma"),
+            "{text}"
+        );
+    }
 
     #[test]
     fn rng_state_round_trips_exactly() {
