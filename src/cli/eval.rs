@@ -111,6 +111,13 @@ pub enum Placement {
     Antipodal,
 }
 
+/// A placement's name as `--pregrasp` spells it.
+fn placement_name(p: Placement) -> String {
+    use clap::ValueEnum;
+    p.to_possible_value()
+        .map_or_else(|| format!("{p:?}"), |v| v.get_name().to_string())
+}
+
 /// The antipodal planner, counting the episodes it placed and those it left at the
 /// default placement (shared by one agent's workers).
 struct CountedPregrasp {
@@ -477,7 +484,7 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             let [planned, fallback] = [0, 1].map(|k| counts[k].load(Ordering::Relaxed));
             if let Some(r) = results.last_mut() {
                 r.pregrasp = Some(PregraspStats {
-                    placement: "antipodal".into(),
+                    placement: placement_name(a.pregrasp),
                     planned,
                     default_placement: fallback,
                 });

@@ -381,7 +381,6 @@ impl VecEnv {
         let mut done = done.into_inner().unwrap_or_else(PoisonError::into_inner);
         done.sort_by_key(|(i, _)| *i);
         let results: Vec<Out> = done.into_iter().map(|(_, out)| out).collect();
-        let n = results.len();
         let mut out = VecStep {
             obs: Vec::with_capacity(n * self.obs_dim),
             rewards: Vec::with_capacity(n),
