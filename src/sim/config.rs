@@ -122,6 +122,21 @@ pub enum DriveModel {
     MotorRow,
 }
 
+/// How the hand multibody's Coriolis and gyroscopic terms are integrated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoriolisModel {
+    /// rapier's semi-implicit treatment: the terms' velocity derivative joins the matrix
+    /// of the free acceleration, a second, unsymmetric matrix built and factored every
+    /// step (with an energy check that falls back to the explicit terms).
+    #[default]
+    Implicit,
+    /// As explicit forces (MuJoCo's Euler integrator): the free acceleration is solved
+    /// with the mass matrix the constraint rows already factor (patch round 5,
+    /// vendor/README.md).
+    Explicit,
+}
+
 /// Which joint limits become solver rows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -258,6 +273,10 @@ pub struct SimConfig {
     /// How the joints' PD control is simulated (see configs/sim.toml).
     #[serde(default)]
     pub drive: DriveModel,
+    /// How the Coriolis and gyroscopic terms are integrated (see configs/sim.toml);
+    /// rapier's semi-implicit treatment when absent.
+    #[serde(default)]
+    pub coriolis: CoriolisModel,
     /// Which joint limits become solver rows (see configs/sim.toml).
     #[serde(default)]
     pub limit_rows: LimitRows,

@@ -32,7 +32,7 @@
 //! clones it, gives it a fresh pipeline, broad phase, narrow phase and island manager,
 //! writes the start posture into the joint coordinates and places hand and object.
 
-use super::config::{DriveModel, LimitRows, SimConfig};
+use super::config::{CoriolisModel, DriveModel, LimitRows, SimConfig};
 use super::contact::HullContactDispatcher;
 use super::object::{ObjectError, ObjectSpec};
 use super::placement::{hand_root_pose, PlacementError};
@@ -735,6 +735,7 @@ impl HandSim {
                     damping[dof] = kd as f32;
                 }
             }
+            mb.set_implicit_coriolis(cfg.coriolis == CoriolisModel::Implicit);
         }
         let hand_bodies = body_links.iter().map(|(b, _)| *b).collect();
         // Object placeholder handles, replaced by `set_object`.

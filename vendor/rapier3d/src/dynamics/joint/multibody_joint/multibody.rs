@@ -123,6 +123,10 @@ pub struct Multibody {
     pub(crate) root_is_dynamic: bool,
     pub(crate) solver_id: u32,
     self_contacts_enabled: bool,
+    /// Whether the Coriolis and gyroscopic terms' velocity derivative joins the matrix the
+    /// free acceleration is solved with (rapier's semi-implicit treatment, the default), or
+    /// the terms act as explicit forces only (patch; MuJoCo's Euler integrator does so).
+    implicit_coriolis: bool,
     /// Holonomic couplings between two of this multibody's generalized
     /// coordinates (`q2 = coeff·q1 + offset`), e.g. MuJoCo's
     /// `<equality><joint>`. Resolved as velocity constraints each step.
@@ -205,6 +209,7 @@ impl Multibody {
             jacobian_inputs: Vec::new(),
             root_is_dynamic: false,
             self_contacts_enabled,
+            implicit_coriolis: true,
             couplings: Vec::new(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
@@ -237,7 +242,9 @@ impl Multibody {
                 continue;
             } else if is_new_root {
                 link2mb[i] = result.len();
-                result.push(Multibody::with_self_contacts(self.self_contacts_enabled));
+                let mut part = Multibody::with_self_contacts(self.self_contacts_enabled);
+                part.implicit_coriolis = self.implicit_coriolis;
+                result.push(part);
             } else {
                 link2mb[i] = link2mb[link.parent_internal_id]
             }
@@ -396,6 +403,23 @@ impl Multibody {
     /// if the contact is enabled on the individual joint with [`GenericJoint::contacts_enabled`].
     pub fn set_self_contacts_enabled(&mut self, enabled: bool) {
         self.self_contacts_enabled = enabled;
+    }
+
+    /// Whether the velocity derivative of the Coriolis and gyroscopic terms is part of the
+    /// matrix the free acceleration is solved with (patch; see
+    /// [`Self::set_implicit_coriolis`]).
+    pub fn implicit_coriolis(&self) -> bool {
+        self.implicit_coriolis
+    }
+
+    /// Sets how the Coriolis and gyroscopic terms are integrated (patch). `true` (rapier's
+    /// default): semi-implicitly, their velocity derivative `dt dC/dv` added to the mass
+    /// matrix of the free acceleration, a second (unsymmetric) matrix built and factored
+    /// every step, with an energy check that falls back to the explicit terms. `false`: as
+    /// explicit forces only (MuJoCo's Euler integrator), the free acceleration solved with
+    /// the same factored mass matrix as the constraints, which skips the Coriolis matrices.
+    pub fn set_implicit_coriolis(&mut self, implicit: bool) {
+        self.implicit_coriolis = implicit;
     }
 
     /// The inverse augmented mass matrix of this multibody: a tree-sparse `Lᵀ D L` (patch)
@@ -613,7 +637,8 @@ impl Multibody {
         // occasionally cause instabilities due to the matrix being near singular.
         // To prevent that, we enable a check that verifies the result and fallbacks
         // to the explicit term if needed
-        let check_implicit_coriolis_divergence = dt * self.velocities.amax() >= 1.0e-3;
+        let check_implicit_coriolis_divergence =
+            self.implicit_coriolis && dt * self.velocities.amax() >= 1.0e-3;
         // Generalized forces that derive from positions or external inputs
         // (gravity, user forces, spring position terms).
         let mut pos_forces = DVector::zeros(if check_implicit_coriolis_divergence {
@@ -730,9 +755,16 @@ impl Multibody {
             DVector::zeros(0)
         };
 
+        // Patch: explicit Coriolis terms (see `set_implicit_coriolis`): the acceleration
+        // is solved with the mass matrix the constraints use.
+        let acc_factor = if self.implicit_coriolis {
+            &self.acc_inv_augmented_mass
+        } else {
+            &self.inv_augmented_mass
+        };
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
-                self.acc_inv_augmented_mass.solve_mut(accs);
+                acc_factor.solve_mut(accs);
             });
 
         if check_implicit_coriolis_divergence {
@@ -1067,14 +1099,18 @@ impl Multibody {
             // Patch: slice fills (a `memset`) instead of nalgebra's element-wise ones, here
             // and for the copies below.
             self.augmented_mass.as_mut_slice().fill(0.0);
-            self.acc_augmented_mass.as_mut_slice().fill(0.0);
+            if self.implicit_coriolis {
+                self.acc_augmented_mass.as_mut_slice().fill(0.0);
+            }
         }
 
         self.augmented_mass_indices.clear();
 
         // Resize coriolis workspaces if the link count or number of DOFs change.
         let coriolis_ndofs = self.coriolis_v.first().map(|m| m.ncols());
-        if self.coriolis_v.len() != self.links.len() || coriolis_ndofs != Some(self.ndofs) {
+        if self.implicit_coriolis
+            && (self.coriolis_v.len() != self.links.len() || coriolis_ndofs != Some(self.ndofs))
+        {
             self.coriolis_v = vec![OMatrix::<Real, Dim, Dyn>::zeros(self.ndofs); self.links.len()];
             self.coriolis_w =
                 vec![OMatrix::<Real, AngDim, Dyn>::zeros(self.ndofs); self.links.len()];
@@ -1118,6 +1154,22 @@ impl Multibody {
                 }
             }
 
+            #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
+            let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
+            sparse_quadform(
+                &mut self.augmented_mass,
+                &rb_mass_matrix_wo_gyro,
+                body_jacobian,
+                cols,
+            );
+
+            // Patch: with explicit Coriolis terms the free acceleration is solved with the
+            // mass matrix itself; the Coriolis matrices below only serve the acceleration
+            // matrix.
+            if !self.implicit_coriolis {
+                continue;
+            }
+
             // Patch: the acceleration matrix is the mass matrix plus `dt Jᵀ` times the
             // gyroscopic and Coriolis terms; the mass matrix's quadratic form is computed
             // once (it is added to the acceleration matrix after the loop), and the
@@ -1126,15 +1178,6 @@ impl Multibody {
             let gyroscopic_matrix = mat_to_na(
                 rb.vels.angvel.gcross_matrix() * rb_inertia
                     - (rb_inertia * rb.vels.angvel).gcross_matrix(),
-            );
-
-            #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
-            let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
-            sparse_quadform(
-                &mut self.augmented_mass,
-                &rb_mass_matrix_wo_gyro,
-                body_jacobian,
-                cols,
             );
 
             /*
@@ -1275,13 +1318,16 @@ impl Multibody {
             sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
         }
         // Patch: the mass matrix's part of the acceleration matrix (see above).
-        for (a, m) in self
-            .acc_augmented_mass
-            .as_mut_slice()
-            .iter_mut()
-            .zip(self.augmented_mass.as_slice())
-        {
-            *a += m;
+        let implicit = self.implicit_coriolis;
+        if implicit {
+            for (a, m) in self
+                .acc_augmented_mass
+                .as_mut_slice()
+                .iter_mut()
+                .zip(self.augmented_mass.as_slice())
+            {
+                *a += m;
+            }
         }
 
         /*
@@ -1294,7 +1340,9 @@ impl Multibody {
          */
         for i in 0..self.ndofs {
             let diag = self.damping[i] * dt + self.armature[i];
-            self.acc_augmented_mass[(i, i)] += diag;
+            if implicit {
+                self.acc_augmented_mass[(i, i)] += diag;
+            }
             self.augmented_mass[(i, i)] += diag;
         }
 
@@ -1310,7 +1358,9 @@ impl Multibody {
                     let k = self.links[li].joint.spring_stiffness[a];
                     if k != 0.0 {
                         let d = k * dt2;
-                        self.acc_augmented_mass[(idx, idx)] += d;
+                        if implicit {
+                            self.acc_augmented_mass[(idx, idx)] += d;
+                        }
                         self.augmented_mass[(idx, idx)] += d;
                     }
                     idx += 1;
@@ -1320,17 +1370,21 @@ impl Multibody {
 
         let effective_dim = self
             .augmented_mass_indices
-            .dim_after_removal(self.acc_augmented_mass.nrows());
+            .dim_after_removal(self.augmented_mass.nrows());
 
         // PERF: since we clone the matrix anyway for LU, should be directly output
         //       a new matrix instead of applying permutations?
-        self.augmented_mass_indices
-            .rearrange_columns(&mut self.acc_augmented_mass, true);
+        if implicit {
+            self.augmented_mass_indices
+                .rearrange_columns(&mut self.acc_augmented_mass, true);
+        }
         self.augmented_mass_indices
             .rearrange_columns(&mut self.augmented_mass, true);
 
-        self.augmented_mass_indices
-            .rearrange_rows(&mut self.acc_augmented_mass, true);
+        if implicit {
+            self.augmented_mass_indices
+                .rearrange_rows(&mut self.acc_augmented_mass, true);
+        }
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
@@ -1340,8 +1394,10 @@ impl Multibody {
         // `U D L`); the constraint matrix is (a tree `Lᵀ D L`).
         let tree = (self.tree_ordered && effective_dim == self.ndofs)
             .then_some(self.dof_parent.as_slice());
-        self.acc_inv_augmented_mass =
-            MassFactor::new_unsymmetric(&self.acc_augmented_mass, effective_dim, tree);
+        if implicit {
+            self.acc_inv_augmented_mass =
+                MassFactor::new_unsymmetric(&self.acc_augmented_mass, effective_dim, tree);
+        }
         self.inv_augmented_mass = MassFactor::new(&self.augmented_mass, effective_dim, tree);
         self.clear_link_inv_mass_jacobians();
     }
@@ -2205,6 +2261,68 @@ mod test {
         RigidBodySet, SoftBodySet,
     };
     use na::{DVector, RowDVector};
+
+    /// Patch round 5: with explicit Coriolis terms the free acceleration `a` solves
+    /// `M a = g` with the constraints' mass matrix `M`; with rapier's semi-implicit ones it
+    /// solves `(M + dt dC/dv) a = g`, the same generalised forces `g`. A spinning
+    /// three-link chain (fixed root, revolute joints about different axes).
+    #[cfg(feature = "dim3")]
+    #[test]
+    fn explicit_coriolis_solves_the_same_forces_with_the_mass_matrix() {
+        use crate::prelude::{ColliderBuilder, PhysicsWorld, RevoluteJointBuilder};
+        let mut world = PhysicsWorld::new();
+        world.integration_parameters.dt = 1.0e-3;
+        let root = world.insert_body(RigidBodyBuilder::fixed());
+        let mut parent = root;
+        let axes = [Vector::X, Vector::Y, Vector::Z];
+        let mut last = None;
+        for (k, axis) in axes.iter().enumerate() {
+            let body = world.insert_body(
+                RigidBodyBuilder::dynamic().translation(Vector::new(0.0, -0.3 * (k + 1) as Real, 0.1)),
+            );
+            world.insert_collider(
+                ColliderBuilder::cuboid(0.05, 0.12, 0.03).density(800.0),
+                Some(body),
+            );
+            let joint = RevoluteJointBuilder::new(*axis)
+                .local_anchor1(Vector::new(0.0, -0.15, 0.05))
+                .local_anchor2(Vector::new(0.0, 0.15, -0.05));
+            last = world.insert_multibody_joint(parent, body, joint);
+            parent = body;
+        }
+        world.step();
+        let handle = last.unwrap();
+        let dt = world.integration_parameters.dt;
+        let solve = |world: &mut PhysicsWorld, implicit: bool| {
+            let (mb, _) = world.multibody_joints.get_mut(handle).unwrap();
+            mb.set_implicit_coriolis(implicit);
+            assert_eq!(mb.implicit_coriolis(), implicit);
+            // Joint speeds of 0.2-0.4 rad/s: dt |v| stays under the 1e-3 at which rapier's
+            // energy check (and its fallback to the explicit terms) starts.
+            mb.velocities.copy_from_slice(&[0.4, -0.3, 0.2]);
+            mb.forward_kinematics(&world.bodies, false);
+            mb.update_velocities(&mut world.bodies);
+            mb.update_mass_matrix(dt, &world.bodies);
+            mb.update_acceleration(dt, &world.bodies);
+            let matrix = if implicit {
+                mb.acc_augmented_mass.clone()
+            } else {
+                mb.augmented_mass.clone()
+            };
+            (matrix.clone() * &mb.accelerations, mb.accelerations.clone(), matrix)
+        };
+        let (g_explicit, a_explicit, m) = solve(&mut world, false);
+        let (g_implicit, a_implicit, m_acc) = solve(&mut world, true);
+        let agree = (&g_explicit - &g_implicit).amax();
+        assert!(agree < 1.0e-4 * g_explicit.amax().max(1.0));
+        // The check discriminates: the implicit accelerations do not solve the mass
+        // matrix's system to that precision.
+        assert!((&m * &a_implicit - &g_implicit).amax() > 10.0 * agree);
+        // The implicit matrix differs from the mass matrix (the Coriolis terms are in it),
+        // and so do the accelerations.
+        assert!((&m_acc - &m).amax() > 1.0e-7);
+        assert!((&a_explicit - &a_implicit).amax() > 0.0);
+    }
 
     #[test]
     fn test_multibody_append() {
