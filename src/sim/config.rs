@@ -549,14 +549,20 @@ mod tests {
     fn absent_solver_and_recycling_fields_keep_rapiers_defaults() {
         let text: String = DEFAULT_SIM_TOML
             .lines()
-            .filter(|l| !l.starts_with("pgs_iterations") && !l.starts_with("recycle_distance"))
+            .filter(|l| {
+                !l.starts_with("pgs_iterations")
+                    && !l.starts_with("recycle_distance")
+                    && !l.starts_with("coriolis")
+            })
             .map(|l| format!("{l}\n"))
             .collect();
         let c = SimConfig::parse(Path::new("s.toml"), &text).unwrap();
         assert_eq!(c.pgs_iterations, 1);
         assert_eq!(c.contacts.recycle_distance, 0.05);
+        assert_eq!(c.coriolis, CoriolisModel::Implicit);
         let d = SimConfig::default();
         assert_eq!(d.pgs_iterations, 4);
+        assert_eq!(d.coriolis, CoriolisModel::Explicit);
         assert_ne!(c, d);
     }
 
@@ -663,6 +669,15 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("torque_thresholds[1]"));
+    }
+
+    #[test]
+    fn unknown_coriolis_model_is_an_error_naming_it() {
+        let text = DEFAULT_SIM_TOML.replace("coriolis = \"explicit\"", "coriolis = \"sideways\"");
+        let e = SimConfig::parse(Path::new("s.toml"), &text)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("s.toml") && e.contains("sideways"), "{e}");
     }
 
     #[test]
