@@ -148,6 +148,9 @@ pub struct Multibody {
     link_dofs_start: Vec<usize>,
     /// `0..ndofs`: the columns of the products when the links are not in tree order.
     all_dofs: Vec<usize>,
+    /// Per link, what the DoF tree was last built from (patch): its parent, first DoF
+    /// and DoF count.
+    dof_tree_key: Vec<[usize; 3]>,
     /// Whether the links are in topological order, so that the tree-sparse mass-matrix
     /// products and factorisation apply (else the dense ones are used).
     tree_ordered: bool,
@@ -203,6 +206,7 @@ impl Multibody {
             link_dofs: Vec::new(),
             link_dofs_start: Vec::new(),
             all_dofs: Vec::new(),
+            dof_tree_key: Vec::new(),
             tree_ordered: false,
             jacobian_chains: Vec::new(),
             link_inv_mass_jacobians: Vec::new(),
@@ -432,6 +436,23 @@ impl Multibody {
     /// and whether the links are in topological order.
     fn update_dof_tree(&mut self) {
         let nl = self.links.len();
+        // Patch: the tree depends only on each link's parent, first DoF and DoF count;
+        // forward kinematics calls this twice per step, and the tree rarely changes.
+        let same = self.dof_parent.len() == self.ndofs
+            && self.all_dofs.len() == self.ndofs
+            && self.dof_tree_key.len() == nl
+            && self.links.iter().zip(&self.dof_tree_key).all(|(l, k)| {
+                *k == [l.parent_internal_id, l.assembly_id, l.joint.ndofs()]
+            });
+        if same {
+            return;
+        }
+        self.dof_tree_key.clear();
+        self.dof_tree_key.extend(
+            self.links
+                .iter()
+                .map(|l| [l.parent_internal_id, l.assembly_id, l.joint.ndofs()]),
+        );
         self.dof_parent.clear();
         self.dof_parent.resize(self.ndofs, NO_PARENT);
         self.link_dofs.clear();
