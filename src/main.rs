@@ -5,6 +5,7 @@ mod cli;
 use clap::Parser;
 
 fn main() {
+    cli::single_threaded_elementwise_ops();
     cli::quiet_broken_pipe();
     let args = cli::Cli::parse();
     cli::init_logging(&args.global);

@@ -116,6 +116,23 @@ pub fn init_logging(g: &Global) {
         .try_init();
 }
 
+/// Keeps candle's element-wise worker pool to the calling thread unless the user chose
+/// otherwise (`CANDLE_NUM_THREADS`). candle 0.11 splits element-wise ops of 64 k
+/// elements or more (PPO's minibatches) over a pool of workers that spin up to 25,000
+/// times waiting for the next op: on 2 cores the spinning worker took 7 % of a training
+/// run's samples and the main thread 4 % more waiting for it (perf), and under load an
+/// update's optimisation took twice as long. Matrix products keep their threads
+/// (`RAYON_NUM_THREADS`); element-wise ops split into independent chunks, so the
+/// results are the same to the bit (a base.toml run's metrics.csv identical but for
+/// its timing columns).
+pub fn single_threaded_elementwise_ops() {
+    const VAR: &str = "CANDLE_NUM_THREADS";
+    if std::env::var_os(VAR).is_none() {
+        // Called first thing in `main`, before any other thread exists.
+        std::env::set_var(VAR, "1");
+    }
+}
+
 /// Makes a closed stdout (`grasp objects list | head -1`) end the process quietly with
 /// status 0, as `rg ... | head` does, instead of the panic of `println!` ("failed printing
 /// to stdout: Broken pipe"). Rust ignores SIGPIPE, so the write fails with `EPIPE` and
