@@ -1106,11 +1106,9 @@ impl Multibody {
             return; // Nothing to do.
         }
         // Patch: forward kinematics, which always precedes this, built the DoF tree;
-        // rebuild it only if the multibody changed since.
-        if self.dof_parent.len() != self.ndofs || self.link_dofs_start.len() != self.links.len() + 1
-        {
-            self.update_dof_tree();
-        }
+        // `update_dof_tree` rebuilds it only if the multibody changed since.
+        self.update_dof_tree();
+        let implicit = self.implicit_coriolis;
 
         if self.augmented_mass.ncols() != self.ndofs {
             // TODO: do a resize instead of a full reallocation.
@@ -1120,7 +1118,7 @@ impl Multibody {
             // Patch: slice fills (a `memset`) instead of nalgebra's element-wise ones, here
             // and for the copies below.
             self.augmented_mass.as_mut_slice().fill(0.0);
-            if self.implicit_coriolis {
+            if implicit {
                 self.acc_augmented_mass.as_mut_slice().fill(0.0);
             }
         }
@@ -1129,7 +1127,7 @@ impl Multibody {
 
         // Resize coriolis workspaces if the link count or number of DOFs change.
         let coriolis_ndofs = self.coriolis_v.first().map(|m| m.ncols());
-        if self.implicit_coriolis
+        if implicit
             && (self.coriolis_v.len() != self.links.len() || coriolis_ndofs != Some(self.ndofs))
         {
             self.coriolis_v = vec![OMatrix::<Real, Dim, Dyn>::zeros(self.ndofs); self.links.len()];
@@ -1187,7 +1185,7 @@ impl Multibody {
             // Patch: with explicit Coriolis terms the free acceleration is solved with the
             // mass matrix itself; the Coriolis matrices below only serve the acceleration
             // matrix.
-            if !self.implicit_coriolis {
+            if !implicit {
                 continue;
             }
 
@@ -1339,7 +1337,6 @@ impl Multibody {
             sparse_gemm_tr(&mut self.acc_augmented_mass, rb_j, &self.i_coriolis_dt, cols);
         }
         // Patch: the mass matrix's part of the acceleration matrix (see above).
-        let implicit = self.implicit_coriolis;
         if implicit {
             for (a, m) in self
                 .acc_augmented_mass
@@ -1395,17 +1392,8 @@ impl Multibody {
 
         // PERF: since we clone the matrix anyway for LU, should be directly output
         //       a new matrix instead of applying permutations?
-        if implicit {
-            self.augmented_mass_indices
-                .rearrange_columns(&mut self.acc_augmented_mass, true);
-        }
         self.augmented_mass_indices
             .rearrange_columns(&mut self.augmented_mass, true);
-
-        if implicit {
-            self.augmented_mass_indices
-                .rearrange_rows(&mut self.acc_augmented_mass, true);
-        }
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
@@ -1416,6 +1404,10 @@ impl Multibody {
         let tree = (self.tree_ordered && effective_dim == self.ndofs)
             .then_some(self.dof_parent.as_slice());
         if implicit {
+            self.augmented_mass_indices
+                .rearrange_columns(&mut self.acc_augmented_mass, true);
+            self.augmented_mass_indices
+                .rearrange_rows(&mut self.acc_augmented_mass, true);
             self.acc_inv_augmented_mass =
                 MassFactor::new_unsymmetric(&self.acc_augmented_mass, effective_dim, tree);
         }
@@ -2330,7 +2322,7 @@ mod test {
             } else {
                 mb.augmented_mass.clone()
             };
-            (matrix.clone() * &mb.accelerations, mb.accelerations.clone(), matrix)
+            (&matrix * &mb.accelerations, mb.accelerations.clone(), matrix)
         };
         let (g_explicit, a_explicit, m) = solve(&mut world, false);
         let (g_implicit, a_implicit, m_acc) = solve(&mut world, true);
