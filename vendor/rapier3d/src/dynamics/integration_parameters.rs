@@ -320,6 +320,12 @@ pub struct IntegrationParameters {
     /// reacting to bias velocities pumps their coherent lean mode until they topple. If
     /// [`Self::num_internal_stabilization_iterations`] is zero there is no unbiased pass and this flag is ignored.
     pub friction_in_bias_pass: bool,
+    /// Patch: with one substep ([`Self::num_solver_iterations`] = 1), a multibody contact
+    /// point that starts the step without a warm-start impulse gets its rows' `M⁻¹ Jᵀ`
+    /// (and its friction rows) built only once the solve needs them, from the same link
+    /// Jacobians: the same numbers, less work when most predicted points never push
+    /// (default: `true`; ignored with several substeps).
+    pub lazy_multibody_contact_rows: bool,
     /// If enabled, impulse-joint constraints are warm-started like contacts: impulses accumulated
     /// by the previous step are re-applied (scaled by [`Self::warmstart_coefficient`]) at the start
     /// of each substep instead of restarting from zero (default: `false`). This
@@ -426,6 +432,7 @@ impl Default for IntegrationParameters {
             contact_recycling: true,
             normalized_contact_recycle_distance: 0.05,
             friction_in_bias_pass: false,
+            lazy_multibody_contact_rows: true,
             warmstart_joints: false,
             length_unit: 1.0,
             #[cfg(feature = "alloc")]

@@ -164,6 +164,14 @@ pub struct Multibody {
     /// the mass matrix: a link in contact carries several rows (three per contact point).
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     link_inv_mass_jacobians: Vec<std::sync::OnceLock<Vec<Real>>>,
+    /// Patch: the body Jacobians and `M⁻¹ Bᵀ` caches of the step's solver rows, kept by
+    /// [`Self::keep_row_inputs`] before the positions move, while `rows_kept`.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    kept_body_jacobians: Vec<Jacobian<Real>>,
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    kept_inv_mass_jacobians: Vec<std::sync::OnceLock<Vec<Real>>>,
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    rows_kept: bool,
     /// Everything the body Jacobians were last built from (patch): per link, the joint
     /// frame's world rotation, its shifts, locked axes, DoF offset and parent. Forward
     /// kinematics runs at the start of every step and again after the integration; when
@@ -210,6 +218,9 @@ impl Multibody {
             tree_ordered: false,
             jacobian_chains: Vec::new(),
             link_inv_mass_jacobians: Vec::new(),
+            kept_body_jacobians: Vec::new(),
+            kept_inv_mass_jacobians: Vec::new(),
+            rows_kept: false,
             jacobian_inputs: Vec::new(),
             root_is_dynamic: false,
             self_contacts_enabled,
@@ -909,9 +920,9 @@ impl Multibody {
 
     /// `M⁻¹ Bᵀ` of link `i` by columns (patch), from its body Jacobian and the current
     /// factorisation.
-    fn link_inv_mass_jacobian(&self, i: usize) -> Vec<Real> {
+    fn link_inv_mass_jacobian(&self, body_jacobian: &Jacobian<Real>, i: usize) -> Vec<Real> {
         let n = self.ndofs;
-        let b = self.body_jacobians[i].as_slice();
+        let b = body_jacobian.as_slice();
         let tree = self.inv_augmented_mass.as_tree();
         let identity = self.augmented_mass_indices.first_to_remove == IndexSequence::NONE;
         if let (Some(tree), Some(chain), true) = (tree, self.link_chain(i), identity) {
@@ -930,7 +941,7 @@ impl Multibody {
             }
             return by_cols;
         }
-        let mut w = self.body_jacobians[i].transpose();
+        let mut w = body_jacobian.transpose();
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut w, |w| {
                 self.inv_augmented_mass.solve_mut(w);
@@ -1102,6 +1113,8 @@ impl Multibody {
     }
 
     pub(crate) fn update_mass_matrix(&mut self, dt: Real, bodies: &RigidBodySet) {
+        // Patch: the kept row inputs belong to the step before.
+        self.rows_kept = false;
         if self.ndofs == 0 {
             return; // Nothing to do.
         }
@@ -1948,6 +1961,85 @@ impl Multibody {
         j_id: &mut usize,
         jacobians: &mut DVector,
     ) -> (Real, Real) {
+        self.fill_jacobians_from(false, link_id, unit_force, unit_torque, j_id, jacobians)
+    }
+
+    /// Patch: [`Self::keep_row_inputs`] keeps the body Jacobians and `M⁻¹ Bᵀ` caches the
+    /// step's solver rows were built from before the integration moves the links (the
+    /// factorisation stays that of the step: the mass matrix is rebuilt at the next one),
+    /// so a row built later in the step's solve is the row the step's start would have
+    /// built.
+    pub(crate) fn keep_row_inputs(&mut self) {
+        self.kept_body_jacobians.clone_from(&self.body_jacobians);
+        core::mem::swap(
+            &mut self.kept_inv_mass_jacobians,
+            &mut self.link_inv_mass_jacobians,
+        );
+        self.clear_link_inv_mass_jacobians();
+        self.rows_kept = true;
+    }
+
+    /// Patch: [`Self::fill_jacobians`] from the inputs [`Self::keep_row_inputs`] kept, if
+    /// it ran since the mass matrix was last built, from the current ones otherwise.
+    pub(crate) fn fill_step_jacobians(
+        &self,
+        link_id: usize,
+        unit_force: Vector,
+        unit_torque: AngVector,
+        j_id: &mut usize,
+        jacobians: &mut DVector,
+    ) -> (Real, Real) {
+        let kept = self.rows_kept;
+        self.fill_jacobians_from(kept, link_id, unit_force, unit_torque, j_id, jacobians)
+    }
+
+    /// Patch: the first half of [`Self::fill_jacobians`], `J` alone, when the link's chain
+    /// is known (`None`: `M⁻¹ Jᵀ` and the effective mass are left to a later
+    /// [`Self::fill_step_jacobians`] of the same row, which writes the same `J`); the whole
+    /// row otherwise (`Some` of what `fill_jacobians` returns first).
+    pub(crate) fn fill_jacobian_only(
+        &self,
+        link_id: usize,
+        unit_force: Vector,
+        unit_torque: AngVector,
+        j_id: &mut usize,
+        jacobians: &mut DVector,
+    ) -> Option<Real> {
+        let link = &self.links[link_id];
+        let cell = self.link_inv_mass_jacobians.get(link.internal_id);
+        match self.link_chain(link.internal_id) {
+            Some(cols) if self.ndofs > 0 && cell.is_some() => {
+                let force = Force {
+                    linear: unit_force,
+                    angular: unit_torque,
+                };
+                link_jacobian_row(
+                    &self.body_jacobians[link.internal_id],
+                    cols,
+                    force.as_vector(),
+                    &mut jacobians.as_mut_slice()[*j_id..*j_id + self.ndofs],
+                );
+                *j_id += self.ndofs * 2;
+                None
+            }
+            _ => Some(self.fill_jacobians(link_id, unit_force, unit_torque, j_id, jacobians).0),
+        }
+    }
+
+    fn fill_jacobians_from(
+        &self,
+        kept: bool,
+        link_id: usize,
+        unit_force: Vector,
+        unit_torque: AngVector,
+        j_id: &mut usize,
+        jacobians: &mut DVector,
+    ) -> (Real, Real) {
+        let (body_jacobians, inv_mass_jacobians) = if kept {
+            (&self.kept_body_jacobians, &self.kept_inv_mass_jacobians)
+        } else {
+            (&self.body_jacobians, &self.link_inv_mass_jacobians)
+        };
         if self.ndofs == 0 {
             return (0.0, 0.0);
         }
@@ -1967,11 +2059,12 @@ impl Multibody {
         let chain = self.link_chain(link.internal_id);
         if let (Some(cols), Some(cell)) = (
             chain,
-            self.link_inv_mass_jacobians.get(link.internal_id),
+            inv_mass_jacobians.get(link.internal_id),
         ) {
-            let w = cell.get_or_init(|| self.link_inv_mass_jacobian(link.internal_id));
+            let bj = &body_jacobians[link.internal_id];
+            let w = cell.get_or_init(|| self.link_inv_mass_jacobian(bj, link.internal_id));
             let result = self.fill_link_jacobian_rows(
-                link.internal_id,
+                bj,
                 cols,
                 w,
                 force.as_vector(),
@@ -1984,12 +2077,12 @@ impl Multibody {
         match chain {
             Some(cols) => {
                 out_j.fill(0.0);
-                let bj = &self.body_jacobians[link.internal_id];
+                let bj = &body_jacobians[link.internal_id];
                 for &c in cols {
                     out_j[c] = bj.column(c).dot(force.as_vector());
                 }
             }
-            None => self.body_jacobians[link.internal_id].tr_mul_to(force.as_vector(), &mut out_j),
+            None => body_jacobians[link.internal_id].tr_mul_to(force.as_vector(), &mut out_j),
         }
 
         // TODO: Optimize with a copy_nonoverlapping?
@@ -2025,7 +2118,7 @@ impl Multibody {
     /// `cols`; returns `(J M⁻¹ Jᵀ, J v)`.
     fn fill_link_jacobian_rows(
         &self,
-        i: usize,
+        body_jacobian: &Jacobian<Real>,
         cols: &[usize],
         w: &[Real],
         f: &SVector<Real, SPATIAL_DIM>,
@@ -2033,16 +2126,8 @@ impl Multibody {
     ) -> (Real, Real) {
         let n = self.ndofs;
         let (j, invm_j) = out.split_at_mut(n);
-        let bj = self.body_jacobians[i].as_slice();
+        link_jacobian_row(body_jacobian, cols, f, j);
         let f: &[Real; SPATIAL_DIM] = &f.data.0[0];
-        // Fixed-size dot products: the compiler unrolls them.
-        let dot = |a: &[Real; SPATIAL_DIM]| (0..SPATIAL_DIM).fold(0.0, |s, k| s + a[k] * f[k]);
-        j.fill(0.0);
-        for &c in cols {
-            if let Ok(b) = bj[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM].try_into() {
-                j[c] = dot(b);
-            }
-        }
         // `M⁻¹ Jᵀ = Σ_k f_k w_k` over six contiguous columns, in one pass that the
         // compiler vectorises.
         let w: [&[Real]; SPATIAL_DIM] = core::array::from_fn(|k| &w[k * n..(k + 1) * n]);
@@ -2521,5 +2606,25 @@ mod test {
             vec,
             DVector::from(vec![0.0, 10.0, 0.0, 0.0, 0.0, 50.0, 60.0, 0.0, 80.0, 0.0])
         );
+    }
+}
+
+/// `J = Bᵀ f` of a unit wrench `f` on a link over its chain `cols` (patch): `j` is zero
+/// outside the chain.
+fn link_jacobian_row(
+    body_jacobian: &Jacobian<Real>,
+    cols: &[usize],
+    f: &SVector<Real, SPATIAL_DIM>,
+    j: &mut [Real],
+) {
+    let bj = body_jacobian.as_slice();
+    let f: &[Real; SPATIAL_DIM] = &f.data.0[0];
+    // Fixed-size dot products: the compiler unrolls them.
+    let dot = |a: &[Real; SPATIAL_DIM]| (0..SPATIAL_DIM).fold(0.0, |s, k| s + a[k] * f[k]);
+    j.fill(0.0);
+    for &c in cols {
+        if let Ok(b) = bj[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM].try_into() {
+            j[c] = dot(b);
+        }
     }
 }

@@ -24,6 +24,7 @@ impl ContactConstraintsSet {
         graph: &SolverContactGraph,
         store: &ManifoldStore,
         jacobian_id: &mut usize,
+        lazy_rows: bool,
     ) {
         let generic = graph.generic();
         let total_num_constraints = generic.len();
@@ -45,6 +46,7 @@ impl ContactConstraintsSet {
                 &mut self.generic_velocity_constraints[curr_id],
                 &mut self.generic_jacobians,
                 jacobian_id,
+                lazy_rows,
             );
         }
     }
@@ -127,6 +129,7 @@ impl VelocitySolver {
         &mut self,
         params: &IntegrationParameters,
         is_last_substep: bool,
+        keep_row_inputs: bool,
         bodies: &mut RigidBodySet,
         multibodies: &mut MultibodyJointSet,
     ) {
@@ -139,6 +142,11 @@ impl VelocitySolver {
                 .rows(multibody.solver_id as usize, multibody.ndofs());
             multibody.velocities.copy_from(&solver_vels);
             multibody.integrate(params.dt);
+            // Patch: rows still to be built in this step's unbiased pass (pending friction)
+            // are built from the links as they were (see `Multibody::keep_row_inputs`).
+            if keep_row_inputs {
+                multibody.keep_row_inputs();
+            }
             multibody.forward_kinematics(bodies, false);
             multibody.update_rigid_bodies_internal(bodies, !is_last_substep, true, false);
 

@@ -585,7 +585,17 @@ impl StagedIslandSolver {
 
         // Generic (multibody) contact constraints: serial init, solved by worker 0.
         let mut jacobian_id = 0;
-        set.compute_generic_constraints(bodies, multibodies, graph, store, &mut jacobian_id);
+        // Patch: rows completed when first needed, with one substep (see
+        // `IntegrationParameters::lazy_multibody_contact_rows`).
+        let lazy_rows = params.lazy_multibody_contact_rows && params.num_solver_iterations == 1;
+        set.compute_generic_constraints(
+            bodies,
+            multibodies,
+            graph,
+            store,
+            &mut jacobian_id,
+            lazy_rows,
+        );
 
         #[cfg(feature = "dim3")]
         self.any_gyroscopic.store(false, Ordering::Relaxed);

@@ -339,16 +339,18 @@ pub(super) unsafe fn solve_pass(
         if has_generic_contacts {
             let contacts = unsafe { &mut *ctx.contact_constraints };
             let vs = unsafe { &mut *ctx.velocity_solver };
-            let jac = &contacts.generic_jacobians;
+            // Worker 0 alone touches the multibodies in this stage (read only).
+            let multibodies = unsafe { &*ctx.multibodies };
+            let jac = &mut contacts.generic_jacobians;
             for c in contacts.generic_velocity_constraints.iter_mut() {
                 if wo_bias {
                     c.remove_cfm_and_bias_from_rhs();
                 }
-                c.solve(
+                c.solve_building_rows(
                     jac,
+                    multibodies,
                     &mut vs.solver_bodies,
                     &mut vs.generic_solver_vels,
-                    true,
                     solve_friction,
                 );
             }

@@ -701,7 +701,21 @@ pub(super) unsafe fn run_worker(ctx: &SharedCtx, worker_id: usize) {
                     let vs = unsafe { &mut *ctx.velocity_solver };
                     let bodies = unsafe { &mut *ctx.bodies };
                     let multibodies = unsafe { &mut *ctx.multibodies };
-                    vs.integrate_multibody_positions(params, is_last_substep, bodies, multibodies);
+                    // Patch: rows still pending (see `GenericContactConstraint::
+                    // fill_pending_friction`) are built from the links as they were before
+                    // this integration moves them.
+                    let contacts = unsafe { &*ctx.contact_constraints };
+                    let pending = contacts
+                        .generic_velocity_constraints
+                        .iter()
+                        .any(|c| c.has_pending_rows());
+                    vs.integrate_multibody_positions(
+                        params,
+                        is_last_substep,
+                        pending,
+                        bodies,
+                        multibodies,
+                    );
                     sync.complete(stage, 1, num_group_bodies + 1);
                 }
                 stage = sync.sync(stage, num_group_bodies + 1);
