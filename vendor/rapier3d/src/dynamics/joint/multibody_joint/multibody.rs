@@ -177,7 +177,17 @@ pub struct Multibody {
     /// kinematics runs at the start of every step and again after the integration; when
     /// nothing changed in between, the Jacobians are kept.
     jacobian_inputs: Vec<[Real; 14]>,
+    /// Patch: the bits of everything forward kinematics last read (see
+    /// [`Self::write_kinematics_inputs`]), and a buffer for the next ones. Forward
+    /// kinematics runs after the integration and again at the start of the next step;
+    /// when nothing it reads changed in between, its results are kept.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    kinematics_inputs: Vec<[u32; KINEMATICS_INPUTS]>,
 }
+
+/// Patch: the number of values of a link's forward-kinematics inputs (see
+/// `Multibody::link_kinematics_inputs`).
+const KINEMATICS_INPUTS: usize = 10 + 2 * 7 + SPATIAL_DIM + 4 + 3;
 impl Default for Multibody {
     fn default() -> Self {
         Multibody::new()
@@ -222,6 +232,7 @@ impl Multibody {
             kept_inv_mass_jacobians: Vec::new(),
             rows_kept: false,
             jacobian_inputs: Vec::new(),
+            kinematics_inputs: Vec::new(),
             root_is_dynamic: false,
             self_contacts_enabled,
             implicit_coriolis: true,
@@ -1773,6 +1784,12 @@ impl Multibody {
         // Be sure the degrees of freedom match and take the root position if needed.
         self.update_root_type(bodies, read_root_pose_from_rigid_body);
 
+        // Patch: the links' poses, shifts and Jacobians are functions of these inputs
+        // alone; unchanged since the last call, they are kept as they are.
+        if !self.update_kinematics_inputs(bodies) {
+            return;
+        }
+
         // Special case for the root, which has no parent.
         {
             let link = &mut self.links[0];
@@ -1809,6 +1826,66 @@ impl Multibody {
          * Compute body jacobians.
          */
         self.update_body_jacobians();
+    }
+
+    /// Patch: records the bits of everything [`Self::forward_kinematics`] reads after
+    /// `update_root_type` and returns whether any changed since the last call: per link,
+    /// its structure (parent, first DoF, DoF count, rigid body), its joint's frames, locked
+    /// axes, kinematic flag, coordinates and rotation, its body's type and local centre of
+    /// mass; the multibody's link and DoF counts.
+    fn update_kinematics_inputs(&mut self, bodies: &RigidBodySet) -> bool {
+        let mut changed = self.kinematics_inputs.len() != self.links.len();
+        self.kinematics_inputs
+            .resize(self.links.len(), [u32::MAX; KINEMATICS_INPUTS]);
+        for (link, stored) in self.links.iter().zip(&mut self.kinematics_inputs) {
+            let inputs = Self::link_kinematics_inputs(link, self.ndofs, bodies);
+            if inputs != *stored {
+                *stored = inputs;
+                changed = true;
+            }
+        }
+        changed
+    }
+
+    fn link_kinematics_inputs(
+        link: &MultibodyLink,
+        ndofs: usize,
+        bodies: &RigidBodySet,
+    ) -> [u32; KINEMATICS_INPUTS] {
+        let joint = &link.joint;
+        let mut out = [0u32; KINEMATICS_INPUTS];
+        let (index, generation) = link.rigid_body.into_raw_parts();
+        let (body_type, com) = match bodies.get(link.rigid_body) {
+            Some(rb) => (rb.body_type as u32, rb.mprops.local_mprops.local_com),
+            None => (u32::MAX, Vector::ZERO),
+        };
+        out[..10].copy_from_slice(&[
+            ndofs as u32,
+            link.parent_internal_id as u32,
+            link.assembly_id as u32,
+            joint.ndofs() as u32,
+            index,
+            generation,
+            joint.data.locked_axes.bits() as u32,
+            joint.kinematic as u32,
+            body_type,
+            0,
+        ]);
+        let mut k = 10;
+        let mut put = |values: &[Real]| {
+            for v in values {
+                out[k] = v.to_bits();
+                k += 1;
+            }
+        };
+        for p in [&joint.data.local_frame1, &joint.data.local_frame2] {
+            let (t, r) = (p.translation, p.rotation);
+            put(&[t.x, t.y, t.z, r.x, r.y, r.z, r.w]);
+        }
+        put(joint.coords.as_slice());
+        let q = joint.joint_rot;
+        put(&[q.x, q.y, q.z, q.w, com.x, com.y, com.z]);
+        out
     }
 
     /// Computes the ids of all the links between the root and the link identified by `link_id`.
@@ -2420,6 +2497,86 @@ mod test {
         // and so do the accelerations.
         assert!((&m_acc - &m).amax() > 1.0e-7);
         assert!((&a_explicit - &a_implicit).amax() > 0.0);
+    }
+
+    /// Forward kinematics keeps its results while what it reads is unchanged (patch), and
+    /// recomputes them when a coordinate, a joint frame or a body's centre of mass changes:
+    /// the same poses, shifts and Jacobians as a multibody that forgot its inputs.
+    #[cfg(feature = "dim3")]
+    #[test]
+    fn forward_kinematics_recomputes_exactly_when_its_inputs_change() {
+        use super::super::Multibody;
+        use crate::prelude::{
+            ColliderBuilder, GenericJoint, PhysicsWorld, PrismaticJointBuilder,
+            RevoluteJointBuilder,
+        };
+        let mut world = PhysicsWorld::new();
+        let root = world.insert_body(RigidBodyBuilder::fixed());
+        let mut parent = root;
+        let mut last = None;
+        // A revolute, a prismatic (its coordinate alone moves it) and a revolute joint.
+        for k in 0..3 {
+            let body = world.insert_body(
+                RigidBodyBuilder::dynamic().translation(Vector::new(0.0, -0.3 * (k + 1) as Real, 0.0)),
+            );
+            world.insert_collider(ColliderBuilder::cuboid(0.05, 0.12, 0.03), Some(body));
+            let (a1, a2) = (Vector::new(0.0, -0.15, 0.0), Vector::new(0.0, 0.15, 0.0));
+            let joint: GenericJoint = if k == 1 {
+                PrismaticJointBuilder::new(Vector::X)
+                    .local_anchor1(a1)
+                    .local_anchor2(a2)
+                    .into()
+            } else {
+                RevoluteJointBuilder::new(if k == 0 { Vector::X } else { Vector::Y })
+                    .local_anchor1(a1)
+                    .local_anchor2(a2)
+                    .into()
+            };
+            last = world.insert_multibody_joint(parent, body, joint);
+            parent = body;
+        }
+        for _ in 0..3 {
+            world.step();
+        }
+        let handle = last.unwrap();
+        let bodies = &mut world.bodies;
+        let (mb, _) = world.multibody_joints.get_mut(handle).unwrap();
+        let state = |mb: &Multibody| {
+            let links: Vec<_> = mb
+                .links
+                .iter()
+                .map(|l| (l.local_to_world, l.shift02, l.shift23))
+                .collect();
+            (links, mb.body_jacobians.clone())
+        };
+        // What a multibody that forgot its last inputs computes.
+        let fresh = |mb: &Multibody, bodies: &RigidBodySet| {
+            let mut fresh = mb.clone();
+            fresh.kinematics_inputs.clear();
+            fresh.forward_kinematics(bodies, false);
+            state(&fresh)
+        };
+        mb.forward_kinematics(bodies, false);
+        let before = state(mb);
+        assert_eq!(before, fresh(mb, bodies));
+        let changes: [&dyn Fn(&mut Multibody, &mut RigidBodySet); 4] = [
+            &|mb, _| mb.apply_displacements(&[0.0, 0.05, 0.0]),
+            &|mb, _| mb.apply_displacements(&[0.1, 0.0, 0.0]),
+            &|mb, _| mb.link_mut(2).unwrap().joint.data.local_frame1.translation.x += 0.01,
+            &|mb, bodies| {
+                let body = mb.link(3).unwrap().rigid_body;
+                bodies[body].mprops.local_mprops.local_com.y += 0.01;
+            },
+        ];
+        let mut previous = before;
+        for change in changes {
+            change(mb, bodies);
+            mb.forward_kinematics(bodies, false);
+            let now = state(mb);
+            assert_ne!(now, previous);
+            assert_eq!(now, fresh(mb, bodies));
+            previous = now;
+        }
     }
 
     #[test]
