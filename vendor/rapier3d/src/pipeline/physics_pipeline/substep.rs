@@ -436,10 +436,15 @@ impl PhysicsPipeline {
         // TODO: do this only on user-change.
         // TODO: do we want some kind of automatic inverse kinematics?
         for multibody in &mut multibody_joints.multibodies {
-            multibody.1.forward_kinematics(bodies, true);
-            multibody
-                .1
-                .update_rigid_bodies_internal(bodies, true, false, false);
+            // Patch: when forward kinematics kept its results (nothing it reads changed
+            // since the end of the last step), only link bodies moved since are updated.
+            if multibody.1.forward_kinematics_changed(bodies, true) {
+                multibody
+                    .1
+                    .update_rigid_bodies_internal(bodies, true, false, false);
+            } else {
+                multibody.1.update_moved_rigid_bodies(bodies);
+            }
         }
 
         // The soft meshes' vertex caches, read by the soft contact passes.

@@ -177,10 +177,10 @@ pub struct Multibody {
     /// kinematics runs at the start of every step and again after the integration; when
     /// nothing changed in between, the Jacobians are kept.
     jacobian_inputs: Vec<[Real; 14]>,
-    /// Patch: the bits of everything forward kinematics last read (see
-    /// [`Self::write_kinematics_inputs`]), and a buffer for the next ones. Forward
-    /// kinematics runs after the integration and again at the start of the next step;
-    /// when nothing it reads changed in between, its results are kept.
+    /// Patch: per link, the bits of everything forward kinematics last read (see
+    /// [`Self::update_kinematics_inputs`]). Forward kinematics runs after the integration
+    /// and again at the start of the next step; when nothing it reads changed in between,
+    /// its results are kept.
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     kinematics_inputs: Vec<[u32; KINEMATICS_INPUTS]>,
 }
@@ -1718,6 +1718,30 @@ impl Multibody {
         }
     }
 
+    /// Patch: `update_rigid_bodies_internal(bodies, true, false, false)` for links whose body
+    /// is not already at the link's pose (position and next position, bit for bit): after
+    /// forward kinematics kept its results, a link body still at its pose had its world
+    /// mass properties computed there at the end of the step before (or by the user change
+    /// that set them), the same values.
+    pub(crate) fn update_moved_rigid_bodies(&self, bodies: &mut RigidBodySet) {
+        let bits = |p: &Pose| {
+            let (t, r) = (p.translation, p.rotation);
+            [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
+        };
+        for link in self.links.iter() {
+            if let Some(rb) = bodies.get_mut_internal(link.rigid_body) {
+                let pose = bits(&link.local_to_world);
+                if bits(&rb.pos.position) == pose && bits(&rb.pos.next_position) == pose {
+                    continue;
+                }
+                rb.pos.next_position = link.local_to_world;
+                rb.pos.position = link.local_to_world;
+                rb.mprops
+                    .update_world_mass_properties(rb.body_type, &link.local_to_world);
+            }
+        }
+    }
+
     /// Update the rigid-body poses based on this multibody joint poses.
     ///
     /// This is typically called after [`Self::forward_kinematics`] to apply the new joint poses
@@ -1781,13 +1805,23 @@ impl Multibody {
         bodies: &RigidBodySet,
         read_root_pose_from_rigid_body: bool,
     ) {
+        self.forward_kinematics_changed(bodies, read_root_pose_from_rigid_body);
+    }
+
+    /// Patch: [`Self::forward_kinematics`], returning whether it computed anything (false:
+    /// nothing it reads changed since its last call, and its results are kept).
+    pub(crate) fn forward_kinematics_changed(
+        &mut self,
+        bodies: &RigidBodySet,
+        read_root_pose_from_rigid_body: bool,
+    ) -> bool {
         // Be sure the degrees of freedom match and take the root position if needed.
         self.update_root_type(bodies, read_root_pose_from_rigid_body);
 
         // Patch: the links' poses, shifts and Jacobians are functions of these inputs
         // alone; unchanged since the last call, they are kept as they are.
         if !self.update_kinematics_inputs(bodies) {
-            return;
+            return false;
         }
 
         // Special case for the root, which has no parent.
@@ -1826,6 +1860,7 @@ impl Multibody {
          * Compute body jacobians.
          */
         self.update_body_jacobians();
+        true
     }
 
     /// Patch: records the bits of everything [`Self::forward_kinematics`] reads after
@@ -2506,6 +2541,8 @@ mod test {
     #[test]
     fn forward_kinematics_recomputes_exactly_when_its_inputs_change() {
         use super::super::Multibody;
+        use crate::dynamics::RigidBodyType;
+        use crate::math::Pose;
         use crate::prelude::{
             ColliderBuilder, GenericJoint, PhysicsWorld, PrismaticJointBuilder,
             RevoluteJointBuilder,
@@ -2577,6 +2614,24 @@ mod test {
             assert_eq!(now, fresh(mb, bodies));
             previous = now;
         }
+
+        // Kept results: only a link body moved away from its link's pose is put back, with
+        // its world mass properties, as the full update does.
+        mb.update_rigid_bodies_internal(bodies, true, false, false);
+        assert!(!mb.forward_kinematics_changed(bodies, false));
+        let (moved, still) = (mb.link(2).unwrap().rigid_body, mb.link(3).unwrap().rigid_body);
+        let away = Pose::from_translation(Vector::new(0.3, 0.0, 0.0)) * bodies[moved].pos.position;
+        bodies[moved].pos.position = away;
+        bodies[moved].mprops.update_world_mass_properties(RigidBodyType::Dynamic, &away);
+        let before_still = bodies[still].mprops.world_com;
+        mb.update_moved_rigid_bodies(bodies);
+        let link_pose = *mb.link(2).unwrap().local_to_world();
+        assert_eq!(bodies[moved].pos.position, link_pose);
+        let mut expected = bodies[moved].mprops.clone();
+        expected.update_world_mass_properties(RigidBodyType::Dynamic, &link_pose);
+        assert_eq!(bodies[moved].mprops.world_com, expected.world_com);
+        assert_ne!(bodies[moved].mprops.world_com, away * expected.local_mprops.local_com);
+        assert_eq!(bodies[still].mprops.world_com, before_still);
     }
 
     #[test]

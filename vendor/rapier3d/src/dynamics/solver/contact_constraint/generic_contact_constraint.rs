@@ -154,9 +154,10 @@ impl GenericContactConstraintBuilder {
         out_constraint.solver_vel2 = solver_vel2;
         out_constraint.manifold_id = manifold_id;
         out_constraint.num_contacts = manifold_points.len() as u8;
-        // Patch: the multibody sides' links, for friction rows built when first needed.
-        out_constraint.link1 = multibody1.map(|(_, id)| (multibodies.rigid_body_link(handle1).unwrap().multibody, id));
-        out_constraint.link2 = multibody2.map(|(_, id)| (multibodies.rigid_body_link(handle2).unwrap().multibody, id));
+        // Patch: the multibody sides' links, for the rows completed when first needed.
+        let link_of = |handle, id| (multibodies.rigid_body_link(handle).unwrap().multibody, id);
+        out_constraint.link1 = multibody1.map(|(_, id)| link_of(handle1, id));
+        out_constraint.link2 = multibody2.map(|(_, id)| link_of(handle2, id));
         out_constraint.friction_pending = 0;
         out_constraint.normal_pending = 0;
         #[cfg(feature = "dim3")]
@@ -718,9 +719,9 @@ impl GenericContactConstraint {
     }
 
     /// Patch: builds point `k`'s two friction rows, which `generate` left pending, into
-    /// their reserved Jacobian slots: the same rows `generate` would have built, from the
-    /// multibody's link Jacobians as they are now (unchanged within a step's biased solve
-    /// when the step has one substep; the unbiased pass runs after the positions moved).
+    /// their reserved Jacobian slots: the rows `generate` would have built (from the
+    /// multibody's kept link Jacobians once the step's integration moved the links, see
+    /// `Multibody::keep_row_inputs`).
     fn fill_pending_friction(
         &mut self,
         k: usize,
@@ -864,8 +865,10 @@ impl GenericContactConstraint {
         );
     }
 
-    /// Solves the rows without building pending friction rows: only for passes that
-    /// leave friction out or when none is pending (the restitution pass).
+    /// Solves the rows without completing pending ones (patch: rapier's `solve`). A pending
+    /// normal row is solved with its `J` and the rigid share as its `r`, which is right
+    /// only where its impulse cannot turn positive: the restitution pass, which zeroes the
+    /// `r` of every row that did not push; pending friction rows must be left out.
     pub fn solve(
         &mut self,
         jacobians: &DVector,
