@@ -1724,20 +1724,13 @@ impl Multibody {
     /// mass properties computed there at the end of the step before (or by the user change
     /// that set them), the same values.
     pub(crate) fn update_moved_rigid_bodies(&self, bodies: &mut RigidBodySet) {
-        let bits = |p: &Pose| {
-            let (t, r) = (p.translation, p.rotation);
-            [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
-        };
         for link in self.links.iter() {
             if let Some(rb) = bodies.get_mut_internal(link.rigid_body) {
-                let pose = bits(&link.local_to_world);
-                if bits(&rb.pos.position) == pose && bits(&rb.pos.next_position) == pose {
-                    continue;
+                let pose = pose_bits(&link.local_to_world);
+                if pose_bits(&rb.pos.position) != pose || pose_bits(&rb.pos.next_position) != pose
+                {
+                    write_link_body(rb, &link.local_to_world, true, false);
                 }
-                rb.pos.next_position = link.local_to_world;
-                rb.pos.position = link.local_to_world;
-                rb.mprops
-                    .update_world_mass_properties(rb.body_type, &link.local_to_world);
             }
         }
     }
@@ -1766,16 +1759,12 @@ impl Multibody {
             };
 
             if let Some(rb) = rb {
-                rb.pos.next_position = link.local_to_world;
-
-                if !update_next_positions_only {
-                    rb.pos.position = link.local_to_world;
-                }
-
-                if update_mass_properties {
-                    rb.mprops
-                        .update_world_mass_properties(rb.body_type, &link.local_to_world);
-                }
+                write_link_body(
+                    rb,
+                    &link.local_to_world,
+                    update_mass_properties,
+                    update_next_positions_only,
+                );
             }
         }
     }
@@ -1907,19 +1896,15 @@ impl Multibody {
             0,
         ]);
         let mut k = 10;
-        let mut put = |values: &[Real]| {
-            for v in values {
-                out[k] = v.to_bits();
-                k += 1;
-            }
+        let mut put = |bits: &[u32]| {
+            out[k..k + bits.len()].copy_from_slice(bits);
+            k += bits.len();
         };
-        for p in [&joint.data.local_frame1, &joint.data.local_frame2] {
-            let (t, r) = (p.translation, p.rotation);
-            put(&[t.x, t.y, t.z, r.x, r.y, r.z, r.w]);
-        }
-        put(joint.coords.as_slice());
+        put(&pose_bits(&joint.data.local_frame1));
+        put(&pose_bits(&joint.data.local_frame2));
+        put(joint.coords.map(Real::to_bits).as_slice());
         let q = joint.joint_rot;
-        put(&[q.x, q.y, q.z, q.w, com.x, com.y, com.z]);
+        put(&[q.x, q.y, q.z, q.w, com.x, com.y, com.z].map(Real::to_bits));
         out
     }
 
@@ -2818,6 +2803,29 @@ mod test {
             vec,
             DVector::from(vec![0.0, 10.0, 0.0, 0.0, 0.0, 50.0, 60.0, 0.0, 80.0, 0.0])
         );
+    }
+}
+
+/// The bits of a pose (patch): translation, then rotation.
+fn pose_bits(p: &Pose) -> [u32; 7] {
+    let (t, r) = (p.translation, p.rotation);
+    [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
+}
+
+/// Puts a link's body at the link's pose `pose`: its next position, its position unless
+/// `next_position_only`, and its world mass properties if `update_mass_properties`.
+fn write_link_body(
+    rb: &mut crate::dynamics::RigidBody,
+    pose: &Pose,
+    update_mass_properties: bool,
+    next_position_only: bool,
+) {
+    rb.pos.next_position = *pose;
+    if !next_position_only {
+        rb.pos.position = *pose;
+    }
+    if update_mass_properties {
+        rb.mprops.update_world_mass_properties(rb.body_type, pose);
     }
 }
 

@@ -344,19 +344,20 @@ impl GenericContactConstraintBuilder {
                     let rhs_wo_bias = manifold_point.tangent_velocity.gdot(tangents1[j]);
                     out_constraint.tangent_part[k].rhs_wo_bias[j] = rhs_wo_bias;
                     out_constraint.tangent_part[k].rhs[j] = rhs_wo_bias;
+                    // A rigid (or fixed) side's share of the inverse effective mass.
+                    let rigid = |type_: crate::dynamics::RigidBodyType,
+                                 mprops: &crate::dynamics::RigidBodyMassProps,
+                                 ii: AngVector,
+                                 torque_dir: AngVector| {
+                        if type_.is_dynamic_or_kinematic() {
+                            tangent_glam.dot(mprops.effective_inv_mass * tangent_glam)
+                                + ii.gdot(torque_dir)
+                        } else {
+                            0.0
+                        }
+                    };
                     if lazy {
                         *jacobian_id += 2 * multibodies_ndof;
-                        let rigid = |type_: crate::dynamics::RigidBodyType,
-                                     mprops: &crate::dynamics::RigidBodyMassProps,
-                                     ii: AngVector,
-                                     torque_dir: AngVector| {
-                            if type_.is_dynamic_or_kinematic() {
-                                tangent_glam.dot(mprops.effective_inv_mass * tangent_glam)
-                                    + ii.gdot(torque_dir)
-                            } else {
-                                0.0
-                            }
-                        };
                         out_constraint.tangent_part[k].r[j] = rigid_share(
                             multibody1.is_some(),
                             multibody2.is_some(),
@@ -375,11 +376,8 @@ impl GenericContactConstraintBuilder {
                             jacobians,
                         )
                         .0
-                    } else if type1.is_dynamic_or_kinematic() {
-                        tangent_glam.dot(mprops1.effective_inv_mass * tangent_glam)
-                            + ii_torque_dir1.gdot(torque_dir1)
                     } else {
-                        0.0
+                        rigid(type1, mprops1, ii_torque_dir1, torque_dir1)
                     };
 
                     let inv_r2 = if let Some((mb2, link_id2)) = multibody2.as_ref() {
@@ -391,11 +389,8 @@ impl GenericContactConstraintBuilder {
                             jacobians,
                         )
                         .0
-                    } else if type2.is_dynamic_or_kinematic() {
-                        tangent_glam.dot(mprops2.effective_inv_mass * tangent_glam)
-                            + ii_torque_dir2.gdot(torque_dir2)
                     } else {
-                        0.0
+                        rigid(type2, mprops2, ii_torque_dir2, torque_dir2)
                     };
 
                     let r = crate::utils::inv(inv_r1 + inv_r2);
@@ -685,9 +680,37 @@ impl GenericContactConstraint {
         self.friction_pending != 0 || self.normal_pending != 0
     }
 
-    /// Patch: completes point `k`'s normal row, which `generate` left with `J` alone:
-    /// the row `generate` would have built (from the multibody's kept link Jacobians once
-    /// the step's integration moved the links, see `Multibody::keep_row_inputs`).
+    /// Patch: completes the row at Jacobian slot `j_id` along `dir` (its torque
+    /// directions `torque_dir1`, `torque_dir2`), which `generate` left pending: writes the
+    /// multibody sides' `J` and `M⁻¹ Jᵀ` as `generate` would have (from the multibody's
+    /// kept link Jacobians once the step's integration moved the links, see
+    /// `Multibody::keep_row_inputs`) and returns the row's `r`, `rigid_share` being the
+    /// rigid side's share that `generate` kept.
+    fn complete_row(
+        &self,
+        mut j_id: usize,
+        dir: Vector,
+        torque_dir1: AngVector,
+        torque_dir2: AngVector,
+        rigid_share: Real,
+        jacobians: &mut DVector,
+        multibodies: &MultibodyJointSet,
+    ) -> Real {
+        let mut side = |link: Option<(MultibodyIndex, usize)>, dir: Vector, torque_dir| match link
+        {
+            Some((mb, link)) => {
+                multibodies[mb]
+                    .fill_step_jacobians(link, dir, torque_dir, &mut j_id, jacobians)
+                    .0
+            }
+            None => rigid_share,
+        };
+        let inv_r1 = side(self.link1, dir, torque_dir1);
+        let inv_r2 = side(self.link2, -dir, torque_dir2);
+        crate::utils::inv(inv_r1 + inv_r2)
+    }
+
+    /// Patch: completes point `k`'s normal row, which `generate` left with `J` alone.
     fn fill_pending_normal(
         &mut self,
         k: usize,
@@ -695,33 +718,21 @@ impl GenericContactConstraint {
         multibodies: &MultibodyJointSet,
     ) {
         let row = (self.ndofs1 + self.ndofs2) * 2;
-        let mut j_id = self.j_id + k * DIM * row;
-        let part = &mut self.normal_part[k];
-        let rigid_share = part.r;
-        let inv_r1 = match self.link1 {
-            Some((mb, link)) => {
-                multibodies[mb]
-                    .fill_step_jacobians(link, self.dir1, part.torque_dir1, &mut j_id, jacobians)
-                    .0
-            }
-            None => rigid_share,
-        };
-        let inv_r2 = match self.link2 {
-            Some((mb, link)) => {
-                multibodies[mb]
-                    .fill_step_jacobians(link, -self.dir1, part.torque_dir2, &mut j_id, jacobians)
-                    .0
-            }
-            None => rigid_share,
-        };
-        part.r = crate::utils::inv(inv_r1 + inv_r2);
+        let part = &self.normal_part[k];
+        self.normal_part[k].r = self.complete_row(
+            self.j_id + k * DIM * row,
+            self.dir1,
+            part.torque_dir1,
+            part.torque_dir2,
+            part.r,
+            jacobians,
+            multibodies,
+        );
         self.normal_pending &= !(1 << k);
     }
 
     /// Patch: builds point `k`'s two friction rows, which `generate` left pending, into
-    /// their reserved Jacobian slots: the rows `generate` would have built (from the
-    /// multibody's kept link Jacobians once the step's integration moved the links, see
-    /// `Multibody::keep_row_inputs`).
+    /// their reserved Jacobian slots.
     fn fill_pending_friction(
         &mut self,
         k: usize,
@@ -733,27 +744,17 @@ impl GenericContactConstraint {
         #[cfg(feature = "dim2")]
         let tangents1 = self.dir1.orthonormal_basis();
         let row = (self.ndofs1 + self.ndofs2) * 2;
-        let part = &mut self.tangent_part[k];
         for (j, tangent) in tangents1.into_iter().enumerate() {
-            let mut j_id = self.j_id + (k * DIM + 1 + j) * row;
-            let rigid_share = part.r[j];
-            let inv_r1 = match self.link1 {
-                Some((mb, link)) => {
-                    multibodies[mb]
-                        .fill_step_jacobians(link, tangent, part.torque_dir1[j], &mut j_id, jacobians)
-                        .0
-                }
-                None => rigid_share,
-            };
-            let inv_r2 = match self.link2 {
-                Some((mb, link)) => {
-                    multibodies[mb]
-                        .fill_step_jacobians(link, -tangent, part.torque_dir2[j], &mut j_id, jacobians)
-                        .0
-                }
-                None => rigid_share,
-            };
-            part.r[j] = crate::utils::inv(inv_r1 + inv_r2);
+            let part = &self.tangent_part[k];
+            self.tangent_part[k].r[j] = self.complete_row(
+                self.j_id + (k * DIM + 1 + j) * row,
+                tangent,
+                part.torque_dir1[j],
+                part.torque_dir2[j],
+                part.r[j],
+                jacobians,
+                multibodies,
+            );
         }
         self.friction_pending &= !(1 << k);
     }
@@ -891,8 +892,7 @@ impl GenericContactConstraint {
 
     /// Patch: builds the pending friction rows of the points whose normal impulse is
     /// positive (the friction rows' skip test in `generic_solve_group`; a pending point's
-    /// friction impulses are zero). Run before the positions move, so the rows are those
-    /// `generate` would have built.
+    /// friction impulses are zero).
     fn fill_pushing_friction(&mut self, jacobians: &mut DVector, multibodies: &MultibodyJointSet) {
         for k in 0..self.num_contacts as usize {
             if self.friction_pending & (1 << k) != 0

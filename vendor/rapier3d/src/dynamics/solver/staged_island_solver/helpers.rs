@@ -142,8 +142,9 @@ impl VelocitySolver {
                 .rows(multibody.solver_id as usize, multibody.ndofs());
             multibody.velocities.copy_from(&solver_vels);
             multibody.integrate(params.dt);
-            // Patch: rows still to be built in this step's unbiased pass (pending friction)
-            // are built from the links as they were (see `Multibody::keep_row_inputs`).
+            // Patch: rows still pending (normal or friction) and completed in this step's
+            // unbiased pass are built from the links as they were (see
+            // `Multibody::keep_row_inputs`).
             if keep_row_inputs {
                 multibody.keep_row_inputs();
             }
