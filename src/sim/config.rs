@@ -187,6 +187,18 @@ pub struct ContactConfig {
     /// as they are) when absent.
     #[serde(default)]
     pub check_normals: bool,
+    /// A library object meets the table with the convex hull of its parts, in one
+    /// manifold of at most eight points (four spanning where it touches, four where it
+    /// may touch next), instead of part by part ([`crate::sim::contact`]); off when
+    /// absent.
+    #[serde(default)]
+    pub table_hull: bool,
+    /// With `table_hull`: how many times faster than other contacts with the table the
+    /// solver corrects the hull's penetration into it (rapier's per-manifold stiffness),
+    /// so that its few points hold the object as firmly as the parts' many did; 1 when
+    /// absent.
+    #[serde(default = "default_table_hull_stiffness")]
+    pub table_hull_stiffness: f64,
     /// rapier's contact recycling (m): a colliding pair whose relative pose drifted less
     /// than this since its last contact computation keeps its contact points and normal
     /// frozen instead of computing them again; 0 turns recycling off. rapier's default,
@@ -197,6 +209,10 @@ pub struct ContactConfig {
 
 fn default_pgs_iterations() -> usize {
     1
+}
+
+fn default_table_hull_stiffness() -> f64 {
+    1.0
 }
 
 fn default_recycle_distance() -> f64 {
@@ -224,6 +240,8 @@ impl Default for ContactConfig {
             static_natural_frequency: default_static_contact_frequency(),
             static_damping_ratio: default_contact_damping(),
             check_normals: false,
+            table_hull: false,
+            table_hull_stiffness: default_table_hull_stiffness(),
             recycle_distance: default_recycle_distance(),
         }
     }
@@ -434,6 +452,13 @@ impl SimConfig {
             if v > 100.0 {
                 return Err(bad(field, v, "must be at most 100"));
             }
+        }
+        if !(1.0..=8.0).contains(&c.table_hull_stiffness) {
+            return Err(bad(
+                "contacts.table_hull_stiffness",
+                c.table_hull_stiffness,
+                "must be in [1, 8]",
+            ));
         }
         nonneg("contacts.recycle_distance", c.recycle_distance)?;
         if c.recycle_distance > 0.1 {

@@ -51,18 +51,43 @@ pub struct ObjectError {
 
 /// The convex parts of a library object, in the simulator's body frame.
 #[derive(Clone)]
-pub struct ConvexParts(Arc<Vec<(Pose, SharedShape)>>);
+pub struct ConvexParts(Arc<PartsData>);
+
+/// The parts and their convex hull.
+struct PartsData {
+    parts: Vec<(Pose, SharedShape)>,
+    hull: Option<SharedShape>,
+}
 
 impl ConvexParts {
+    /// The parts with the convex hull of all their vertices (body frame; `None` when parry
+    /// cannot build it, e.g. for coplanar points).
+    fn new(parts: Vec<(Pose, SharedShape)>) -> Self {
+        let points: Vec<Vector> = parts
+            .iter()
+            .filter_map(|(pose, shape)| Some((pose, shape.as_convex_polyhedron()?)))
+            .flat_map(|(pose, poly)| poly.points().iter().map(move |p| *pose * *p))
+            .collect();
+        let hull = SharedShape::convex_hull(&points);
+        ConvexParts(Arc::new(PartsData { parts, hull }))
+    }
+
     /// The parts: each a convex shape with its pose in the body frame.
     pub fn parts(&self) -> &[(Pose, SharedShape)] {
-        &self.0
+        &self.0.parts
+    }
+
+    /// The convex hull of the parts' vertices (body frame): a convex polyhedron, the shape
+    /// the object meets the table with when `contacts.table_hull` is on (see
+    /// [`crate::sim::contact`]).
+    pub fn hull(&self) -> Option<&SharedShape> {
+        self.0.hull.as_ref()
     }
 }
 
 impl std::fmt::Debug for ConvexParts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "ConvexParts({} parts)", self.0.len())
+        write!(f, "ConvexParts({} parts)", self.0.parts.len())
     }
 }
 
@@ -177,7 +202,10 @@ impl ObjectShape {
                     .collect();
                 let (t, q) = *body_from_library;
                 ObjectShape::Library {
-                    parts: ConvexParts(Arc::new(scaled?)),
+                    parts: ConvexParts(Arc::new(PartsData {
+                        parts: scaled?,
+                        hull: parts.hull().and_then(|h| scale_shape(h, sf)),
+                    })),
                     part_count: *part_count,
                     support_feet: *support_feet,
                     half: half.map(|h| h * s),
@@ -239,6 +267,15 @@ impl ObjectShape {
                 half_height,
             }),
             ObjectShape::Library { .. } => None,
+        }
+    }
+
+    /// The convex hull of a library object's parts (body frame), `None` for primitives:
+    /// the shape it meets the table with when `contacts.table_hull` is on.
+    pub fn table_hull(&self) -> Option<&SharedShape> {
+        match self {
+            ObjectShape::Library { parts, .. } => parts.hull(),
+            _ => None,
         }
     }
 
@@ -411,7 +448,7 @@ impl ObjectSpec {
             shape: ObjectShape::Library {
                 part_count: parts.len(),
                 support_feet,
-                parts: ConvexParts(Arc::new(parts)),
+                parts: ConvexParts::new(parts),
                 half,
                 com,
                 unit_inertia,
@@ -694,6 +731,38 @@ mod tests {
         let (a, b) = (s.mass_properties(), heavy.mass_properties());
         let ratio = b.principal_inertia().x / a.principal_inertia().x;
         assert!((ratio - 2.0).abs() < 1e-4, "{ratio}");
+    }
+
+    #[test]
+    fn table_hull_encloses_every_part_and_scales_with_the_object() {
+        let s = ObjectSpec::from_object(&library("mug")).unwrap();
+        let ObjectShape::Library { parts, .. } = &s.shape else {
+            panic!("not a library shape")
+        };
+        let hull = s.shape.table_hull().unwrap();
+        let poly = hull.as_convex_polyhedron().unwrap();
+        // Every vertex of every part is inside the hull (within rounding) and the hull's
+        // box is the parts' box.
+        for (pose, part) in parts.parts() {
+            for p in part.as_convex_polyhedron().unwrap().points() {
+                let q = *pose * *p;
+                for f in poly.faces() {
+                    let v = poly.points()
+                        [poly.vertices_adj_to_face()[f.first_vertex_or_edge as usize] as usize];
+                    assert!(f.normal.dot(q - v) < 1e-5, "{q:?} outside a face");
+                }
+            }
+        }
+        let (a, b) = (
+            hull.compute_aabb(&Pose::IDENTITY),
+            s.shape.collider().build().compute_aabb(),
+        );
+        assert!((a.mins - b.mins).length() < 1e-6 && (a.maxs - b.maxs).length() < 1e-6);
+        // Scaled with the object; primitives have none.
+        let big = s.shape.scaled(2.0).unwrap();
+        let c = big.table_hull().unwrap().compute_aabb(&Pose::IDENTITY);
+        assert!((c.maxs - a.maxs * 2.0).length() < 1e-6, "{c:?}");
+        assert!(ObjectSpec::default_box().shape.table_hull().is_none());
     }
 
     #[test]

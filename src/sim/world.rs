@@ -317,6 +317,8 @@ type BodyLinks = (RigidBodyHandle, Vec<(usize, Isometry3<f64>)>);
 const HAND_GROUP: Group = Group::GROUP_1;
 const TABLE_GROUP: Group = Group::GROUP_2;
 const OBJECT_GROUP: Group = Group::GROUP_3;
+/// The object's convex hull, its collider against the table (`contacts.table_hull`).
+const OBJECT_HULL_GROUP: Group = Group::GROUP_4;
 /// Half length (m) of the capsule that stands in for a URDF sphere (see `HandSim::new`).
 const SPHERE_AS_CAPSULE_HALF_LENGTH: f32 = 1e-4;
 /// Travel of the lift joint (m): its limits, far from anything an episode reaches.
@@ -355,10 +357,17 @@ fn pose_f64(p: &Pose) -> Isometry3<f64> {
 }
 
 /// A narrow phase with the contact check of [`HullContactDispatcher`] when
-/// `contacts.check_normals` is on, parry's contacts as they are otherwise.
-fn narrow_phase(cfg: &SimConfig) -> NarrowPhase {
-    if cfg.contacts.check_normals {
-        NarrowPhase::with_query_dispatcher(HullContactDispatcher)
+/// `contacts.check_normals` is on and its table contacts of the object's hull when
+/// `contacts.table_hull` is, parry's contacts as they are otherwise.
+fn narrow_phase(cfg: &SimConfig, sets: &Sets, table: ColliderHandle) -> NarrowPhase {
+    let c = &cfg.contacts;
+    if c.check_normals || c.table_hull {
+        let table = c
+            .table_hull
+            .then(|| sets.colliders.get(table).map(|t| t.shape()))
+            .flatten()
+            .map(|t| (t, c.table_hull_stiffness as f32));
+        NarrowPhase::with_query_dispatcher(HullContactDispatcher::new(c.check_normals, table))
     } else {
         NarrowPhase::new()
     }
@@ -420,6 +429,9 @@ pub struct HandSim {
     object: ObjectSpec,
     object_body: RigidBodyHandle,
     object_collider: ColliderHandle,
+    /// The object's convex hull, which alone meets the table (`contacts.table_hull`);
+    /// invalid otherwise.
+    object_hull: ColliderHandle,
     object_start: Vector3<f64>,
     table: ColliderHandle,
     targets: [f64; 24],
@@ -457,7 +469,7 @@ impl HandSim {
                 .friction_combine_rule(min)
                 .collision_groups(InteractionGroups::new(
                     TABLE_GROUP,
-                    HAND_GROUP | OBJECT_GROUP,
+                    HAND_GROUP | OBJECT_GROUP | OBJECT_HULL_GROUP,
                     InteractionTestMode::And,
                 )),
             table_body,
@@ -757,7 +769,7 @@ impl HandSim {
             c.static_natural_frequency as f32,
             c.static_damping_ratio as f32,
         );
-        let narrow_phase = narrow_phase(&cfg);
+        let narrow_phase = narrow_phase(&cfg, &sets, table);
         let mut sim = HandSim {
             cfg,
             template: sets.clone(),
@@ -779,6 +791,7 @@ impl HandSim {
             object: object.clone(),
             object_body: RigidBodyHandle::invalid(),
             object_collider: ColliderHandle::invalid(),
+            object_hull: ColliderHandle::invalid(),
             object_start: Vector3::zeros(),
             table,
             targets: [0.0; 24],
@@ -817,24 +830,47 @@ impl HandSim {
                 .additional_mass_properties(object.mass_properties())
                 .translation(Vector::new(0.0, 0.0, object.rest_height() as f32)),
         );
-        let collider = t.colliders.insert_with_parent(
-            object
-                .shape
-                .collider()
-                // Zero mass given explicitly, not as density 0: with a density rapier
-                // recomputes the compound's mass properties (tetrahedra of every convex
-                // part) whenever the body's mass is updated, i.e. after every reset.
-                .mass_properties(MassProperties::default())
+        // With `contacts.table_hull` a library object meets the table with its convex
+        // hull, a second collider, and the hand with its parts.
+        let hull = object
+            .shape
+            .table_hull()
+            .filter(|_| self.cfg.contacts.table_hull);
+        let meets = if hull.is_some() {
+            Group::ALL.difference(TABLE_GROUP)
+        } else {
+            Group::ALL
+        };
+        // Zero mass given explicitly, not as density 0: with a density rapier recomputes
+        // the compound's mass properties (tetrahedra of every convex part) whenever the
+        // body's mass is updated, i.e. after every reset.
+        let massless = |b: ColliderBuilder, membership: Group, filter: Group| {
+            b.mass_properties(MassProperties::default())
                 .friction(object.friction as f32)
                 .friction_combine_rule(CoefficientCombineRule::Min)
                 .collision_groups(InteractionGroups::new(
-                    OBJECT_GROUP,
-                    Group::ALL,
+                    membership,
+                    filter,
                     InteractionTestMode::And,
-                )),
+                ))
+        };
+        let collider = t.colliders.insert_with_parent(
+            massless(object.shape.collider(), OBJECT_GROUP, meets),
             body,
             &mut t.bodies,
         );
+        self.object_hull = match hull {
+            Some(h) => t.colliders.insert_with_parent(
+                massless(
+                    ColliderBuilder::new(h.clone()),
+                    OBJECT_HULL_GROUP,
+                    TABLE_GROUP,
+                ),
+                body,
+                &mut t.bodies,
+            ),
+            None => ColliderHandle::invalid(),
+        };
         self.object = object;
         self.object_body = body;
         self.object_collider = collider;
@@ -874,7 +910,7 @@ impl HandSim {
         self.pipeline = PhysicsPipeline::new();
         self.islands = IslandManager::new();
         self.broad_phase = DefaultBroadPhase::default();
-        self.narrow_phase = narrow_phase(&self.cfg);
+        self.narrow_phase = narrow_phase(&self.cfg, &self.sets, self.table);
         self.ccd = CCDSolver::new();
         self.soft = SoftBodySet::new();
         self.physics_steps = 0;
@@ -1193,30 +1229,40 @@ impl HandSim {
     /// The object's deepest penetrating contact in the current step, unnamed: its depth,
     /// the collider the object touched and the object's part (see
     /// [`HandSim::object_contact`]).
-    fn deepest_object_pair(&self) -> Option<(f64, ColliderHandle, u32)> {
-        let mut best: Option<(f64, ColliderHandle, u32)> = None;
-        for pair in self.narrow_phase.contact_pairs_with(self.object_collider) {
+    fn deepest_object_pair(&self) -> Option<(f64, ColliderHandle, Option<u32>)> {
+        let mut best: Option<(f64, ColliderHandle, Option<u32>)> = None;
+        let pairs = self
+            .narrow_phase
+            .contact_pairs_with(self.object_collider)
+            .chain(self.narrow_phase.contact_pairs_with(self.object_hull));
+        for pair in pairs {
             let Some((m, depth)) = self.pair_depth(pair) else {
                 continue;
             };
             if depth <= 0.0 || best.is_some_and(|b| b.0 >= depth) {
                 continue;
             }
-            best = Some(if pair.collider1 == self.object_collider {
-                (depth, pair.collider2, m.subshape1)
-            } else {
-                (depth, pair.collider1, m.subshape2)
-            });
+            // The part of a compound object; none for the hull that meets the table.
+            let part = |c: ColliderHandle, sub: u32| (c == self.object_collider).then_some(sub);
+            best = Some(
+                if pair.collider1 == self.object_collider || pair.collider1 == self.object_hull {
+                    (depth, pair.collider2, part(pair.collider1, m.subshape1))
+                } else {
+                    (depth, pair.collider1, part(pair.collider2, m.subshape2))
+                },
+            );
         }
         best
     }
 
     /// The object's contact of `depth` with collider `other` on its part `sub`, named.
-    fn object_contact(&self, depth: f64, other: ColliderHandle, sub: u32) -> ObjectContact {
+    fn object_contact(&self, depth: f64, other: ColliderHandle, sub: Option<u32>) -> ObjectContact {
         ObjectContact {
             depth,
             with: self.collider_name(other),
-            part: (self.object.shape.part_count() > 1).then_some(sub as usize),
+            part: sub
+                .filter(|_| self.object.shape.part_count() > 1)
+                .map(|s| s as usize),
             step: self.physics_steps,
         }
     }
@@ -1464,6 +1510,7 @@ impl HandSim {
     /// Normal force (N) between the object and the table top.
     pub fn table_object_force(&self) -> f64 {
         self.pair_force(self.table, self.object_collider)
+            + self.pair_force(self.table, self.object_hull)
     }
 
     /// Total normal force (N) between the object and any hand collider.

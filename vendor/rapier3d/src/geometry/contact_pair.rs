@@ -744,6 +744,19 @@ pub struct ContactManifoldData {
     /// The effective restitution coefficient of this manifold's contacts.
     #[cfg_attr(feature = "serde-serialize", serde(default))]
     pub restitution: Real,
+    /// Multiplies the rate at which the solver corrects this manifold's penetrations (the
+    /// softness's `erp / dt`), as if each of its contacts stood for that many: a manifold
+    /// reduced to a few points of a larger contact area keeps the stiffness of the area.
+    /// 1 (the default) leaves the integration parameters' softness as it is. Read by the
+    /// rigid-body contact constraints only (not by multibody contacts). Never written by
+    /// rapier: set it where the manifold is computed (a query dispatcher).
+    #[cfg_attr(feature = "serde-serialize", serde(default = "unit_stiffness"))]
+    pub stiffness: Real,
+}
+
+#[cfg(feature = "serde-serialize")]
+fn unit_stiffness() -> Real {
+    1.0
 }
 
 /// A single solver contact.
@@ -968,6 +981,7 @@ impl ContactManifoldData {
             user_data: 0,
             friction: 0.0,
             restitution: 0.0,
+            stiffness: 1.0,
         }
     }
 

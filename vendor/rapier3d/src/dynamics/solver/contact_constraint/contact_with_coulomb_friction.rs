@@ -46,6 +46,8 @@ pub(crate) struct ContactWithCoulombFrictionBuilder {
     /// The pair's restitution coefficient (needed by `update` to recompute the
     /// restitution rhs seed).
     restitution: SimdReal,
+    /// The manifold's stiffness (`ContactManifoldData::stiffness`): multiplies `erp / dt`.
+    stiffness: SimdReal,
 }
 
 impl ContactWithCoulombFrictionBuilder {
@@ -148,6 +150,7 @@ impl ContactWithCoulombFrictionBuilder {
         out_constraint.num_contacts = num_points as u8;
         out_builder.local_n1 = poses1.rotation.inverse() * force_dir1;
         out_builder.restitution = restitution;
+        out_builder.stiffness = SimdReal::from(array![|ii| manifolds[ii].data.stiffness]);
         #[cfg(feature = "dim3")]
         {
             out_constraint.tangent1 = tangents1[0];
@@ -423,7 +426,7 @@ impl ContactWithCoulombFrictionBuilder {
                 // lets every loaded interface settle to its deep edge, and the accumulated
                 // penetration keeps large piles wedging and creeping instead of resting.
                 let rhs_bias =
-                    (dist * erp_inv_dt).simd_clamp(-max_corrective_velocity, SimdReal::zero());
+                    (dist * erp_inv_dt * self.stiffness).simd_clamp(-max_corrective_velocity, SimdReal::zero());
                 let new_rhs = rhs_wo_bias + rhs_bias;
 
                 normal_part.rhs_wo_bias = rhs_wo_bias;
