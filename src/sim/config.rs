@@ -571,6 +571,24 @@ mod tests {
     }
 
     #[test]
+    fn table_hull_config_is_the_default_but_for_its_switch() {
+        let path = Path::new("configs/sim_table_hull.toml");
+        let hull =
+            SimConfig::parse(path, include_str!("../../configs/sim_table_hull.toml")).unwrap();
+        let mut default = SimConfig::default();
+        assert!(!default.contacts.table_hull && hull.contacts.table_hull);
+        default.contacts.table_hull = true;
+        assert_eq!(hull, default);
+        // The stiffness is checked.
+        for bad in [0.5, 9.0, f64::NAN] {
+            let mut c = hull.clone();
+            c.contacts.table_hull_stiffness = bad;
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("contacts.table_hull_stiffness"), "{e}");
+        }
+    }
+
+    #[test]
     fn absent_solver_and_recycling_fields_keep_rapiers_defaults() {
         let text: String = DEFAULT_SIM_TOML
             .lines()

@@ -36,6 +36,11 @@
 //! its contact computed exactly from the hull's faces instead ([`point_hull_distance`]):
 //! parry's GJK puts points up to 17 mm from where they are on the object hulls.
 //!
+//! # The table
+//! Given the table's shape (`contacts.table_hull`), a convex polyhedron against it (the
+//! object's convex hull, which then meets the table in place of its parts) gets one
+//! manifold of at most four of its vertices ([`table_hull_manifold`]).
+//!
 //! [`HullContactDispatcher`] is parry's [`DefaultQueryDispatcher`] except for these
 //! manifolds; compound shapes dispatch their parts back to it.
 
@@ -491,7 +496,7 @@ const FIRST_CORNER: Vector = Vector::new(0.581, 0.492, 0.648);
 /// the others, chosen alike, are the speculative contacts where the hull may touch next.
 /// Each point is known by its vertex, so it keeps its warm start while that vertex stays
 /// chosen.
-fn table_hull_manifold(
+pub fn table_hull_manifold(
     pos12: &Pose,
     hull: &ConvexPolyhedron,
     table: &Cuboid,
