@@ -293,38 +293,10 @@ impl PersistentQueryDispatcher<ContactManifoldData, ContactData> for HullContact
         prediction: Real,
         manifold: &mut Manifold,
     ) -> Result<(), Unsupported> {
-        if !self.check_normals {
-            return DefaultQueryDispatcher.contact_manifold_convex_convex(
-                pos12,
-                g1,
-                g2,
-                normal_constraints1,
-                normal_constraints2,
-                prediction,
-                manifold,
-            );
-        }
-        // A fingertip (a ball, or the 0.2 mm capsule that stands for one) against a hull:
-        // its contact computed exactly (see [`ball_hull_manifold`]).
-        if let (Some(ball), Some(hull)) = (ball_like(g1), g2.as_convex_polyhedron()) {
-            ball_hull_manifold(pos12, BallSide::First(ball), hull, prediction, manifold);
+        let plain = normal_constraints1.is_none() && normal_constraints2.is_none();
+        if self.check_normals && checked_convex_manifold(pos12, g1, g2, plain, prediction, manifold)
+        {
             return Ok(());
-        }
-        if let (Some(hull), Some(ball)) = (g1.as_convex_polyhedron(), ball_like(g2)) {
-            ball_hull_manifold(pos12, BallSide::Second(ball), hull, prediction, manifold);
-            return Ok(());
-        }
-        // Pairs with a manifold of their own in parry (ball, half-space, box-box,
-        // capsule-capsule) and pairs with normal constraints (meshes) stay parry's.
-        let own = matches!(
-            (g1.shape_type(), g2.shape_type()),
-            (ShapeType::Cuboid, ShapeType::Cuboid) | (ShapeType::Capsule, ShapeType::Capsule)
-        );
-        if !own && normal_constraints1.is_none() && normal_constraints2.is_none() {
-            if let (Some(f1), Some(f2)) = (features(g1), features(g2)) {
-                verified_manifold(pos12, &f1, &f2, prediction, manifold);
-                return Ok(());
-            }
         }
         DefaultQueryDispatcher.contact_manifold_convex_convex(
             pos12,
@@ -336,6 +308,43 @@ impl PersistentQueryDispatcher<ContactManifoldData, ContactData> for HullContact
             manifold,
         )
     }
+}
+
+/// The checked manifold of two convex shapes (see the module docs): a fingertip against a
+/// hull exactly, other pairs of polygonal feature maps verified; false for the pairs left
+/// to parry (those with a manifold of their own, and pairs with normal constraints, i.e.
+/// not `plain`).
+fn checked_convex_manifold(
+    pos12: &Pose,
+    g1: &dyn Shape,
+    g2: &dyn Shape,
+    plain: bool,
+    prediction: Real,
+    manifold: &mut Manifold,
+) -> bool {
+    // A fingertip (a ball, or the 0.2 mm capsule that stands for one) against a hull:
+    // its contact computed exactly (see [`ball_hull_manifold`]).
+    if let (Some(ball), Some(hull)) = (ball_like(g1), g2.as_convex_polyhedron()) {
+        ball_hull_manifold(pos12, BallSide::First(ball), hull, prediction, manifold);
+        return true;
+    }
+    if let (Some(hull), Some(ball)) = (g1.as_convex_polyhedron(), ball_like(g2)) {
+        ball_hull_manifold(pos12, BallSide::Second(ball), hull, prediction, manifold);
+        return true;
+    }
+    // Pairs with a manifold of their own in parry (ball, half-space, box-box,
+    // capsule-capsule) and pairs with normal constraints (meshes) stay parry's.
+    let own = matches!(
+        (g1.shape_type(), g2.shape_type()),
+        (ShapeType::Cuboid, ShapeType::Cuboid) | (ShapeType::Capsule, ShapeType::Capsule)
+    );
+    if !own && plain {
+        if let (Some(f1), Some(f2)) = (features(g1), features(g2)) {
+            verified_manifold(pos12, &f1, &f2, prediction, manifold);
+            return true;
+        }
+    }
+    false
 }
 
 /// Half length (m) under which a capsule is a ball for contact generation: the simulated
