@@ -24,13 +24,8 @@ fn specs(set: &str) -> Vec<ObjectSpec> {
         .collect()
 }
 
-fn new_sim(obj: &ObjectSpec) -> HandSim {
-    HandSim::new(
-        &Robot::builtin(Side::Left),
-        obj.clone(),
-        SimConfig::default(),
-    )
-    .unwrap()
+fn new_sim(obj: &ObjectSpec, cfg: &SimConfig) -> HandSim {
+    HandSim::new(&Robot::builtin(Side::Left), obj.clone(), cfg.clone()).unwrap()
 }
 
 /// How an object behaved resting on the table.
@@ -94,9 +89,8 @@ fn every_builtin_object_rests_stably_on_the_table() {
     let results: Vec<Rest> = [SimConfig::default(), hull]
         .iter()
         .flat_map(|cfg| {
-            let sim = || HandSim::new(&Robot::builtin(Side::Left), objs[0].clone(), cfg.clone());
             objs.par_iter()
-                .map_init(|| sim().unwrap(), |sim, o| rest(sim, o, 3.0))
+                .map_init(|| new_sim(&objs[0], cfg), |sim, o| rest(sim, o, 3.0))
                 .collect::<Vec<_>>()
         })
         .collect();
@@ -134,7 +128,7 @@ fn scripted_grasp_holds_some_objects_and_drops_others() {
     let outcomes: Vec<(String, bool, f64, Option<String>)> = objs
         .par_iter()
         .map_init(
-            || new_sim(&objs[0]),
+            || new_sim(&objs[0], &SimConfig::default()),
             |sim, o| {
                 sim.set_object(o.clone()).unwrap();
                 sim.reset(&Scene::top_down(o, Posture::Open.angles(), 0.01, 0.0))
@@ -265,7 +259,7 @@ fn a_dense_mesh_is_simplified_and_simulates() {
     assert!(v > 0.95 * exact && v <= 1.0001 * exact, "{v} vs {exact}");
     // The hand closes on it and lifts: no physics failure.
     let spec = ObjectSpec::from_object(o).unwrap();
-    let mut sim = new_sim(&spec);
+    let mut sim = new_sim(&spec, &SimConfig::default());
     sim.reset(&Scene::top_down(&spec, Posture::Open.angles(), 0.01, 0.0))
         .unwrap();
     let t0 = std::time::Instant::now();
@@ -281,8 +275,8 @@ fn a_dense_mesh_is_simplified_and_simulates() {
 }
 
 /// With `contacts.table_hull` (configs/sim_table_hull.toml) a library object rests on the
-/// table through its convex hull (one manifold of at most four points) as it did on its convex parts: no
-/// contact of the object goes more than 0.1 mm deep in its first second, with the hull and
+/// table through its convex hull (one manifold of at most four points) as it did on its
+/// convex parts: no contact of the object goes more than 0.1 mm deep in its first second, with the hull and
 /// part by part, and with the hull the table carries the object's weight (averaged over
 /// the second's last tenth).
 #[test]
@@ -295,8 +289,7 @@ fn library_objects_rest_on_the_table_through_their_hulls() {
         cfg.contacts.table_hull_stiffness = 4.0;
         for obj in &objs {
             assert!(obj.shape.table_hull().is_some(), "{}", obj.name);
-            let mut sim =
-                HandSim::new(&Robot::builtin(Side::Left), obj.clone(), cfg.clone()).unwrap();
+            let mut sim = new_sim(obj, &cfg);
             sim.reset(&Scene::above(obj, Posture::Open.angles(), 0.3, 0.0))
                 .unwrap();
             // The table's force averaged over the last 0.1 s (one step's varies with the

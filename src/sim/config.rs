@@ -188,9 +188,8 @@ pub struct ContactConfig {
     #[serde(default)]
     pub check_normals: bool,
     /// A library object meets the table with the convex hull of its parts, in one
-    /// manifold of at most eight points (four spanning where it touches, four where it
-    /// may touch next), instead of part by part ([`crate::sim::contact`]); off when
-    /// absent.
+    /// manifold of at most four points (spanning where it touches, then where it may
+    /// touch next), instead of part by part ([`crate::sim::contact`]); off when absent.
     #[serde(default)]
     pub table_hull: bool,
     /// With `table_hull`: how many times faster than other contacts with the table the

@@ -493,7 +493,7 @@ const TABLE_POINTS: usize = 4;
 const FIRST_CORNER: Vector = Vector::new(0.581, 0.492, 0.648);
 
 /// The contact manifold of a convex polyhedron (the object's hull) and the table's top
-/// face: at most eight of the hull's vertices within `prediction` of the face. A convex
+/// face: at most four of the hull's vertices within `prediction` of the face. A convex
 /// object's contact with a plane is at its vertices, and a non-convex object (a union of
 /// convex parts) touches a plane only where its convex hull does, so the hull meets the
 /// table as the parts would, without the points each part adds where it touches beside
@@ -501,8 +501,9 @@ const FIRST_CORNER: Vector = Vector::new(0.581, 0.492, 0.648);
 /// with the table per step; see docs/simulator.md). The vertices within
 /// [`TABLE_TOUCH_BAND`] of the deepest are the touching ones; up to four of them span
 /// their polygon (the one farthest along a fixed direction of the hull, the one farthest
-/// from it, and the farthest on each side of the line through both), and up to four of
-/// the others, chosen alike, are the speculative contacts where the hull may touch next.
+/// from it, and the farthest on each side of the line through both), and the places left
+/// go to the others, chosen alike: the speculative contacts where the hull may touch
+/// next.
 /// Each point is known by its vertex, so it keeps its warm start while that vertex stays
 /// chosen.
 pub fn table_hull_manifold(
