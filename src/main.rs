@@ -5,7 +5,7 @@ mod cli;
 use clap::Parser;
 
 fn main() {
-    cli::single_threaded_elementwise_ops();
+    cli::configure_candle_threads();
     cli::quiet_broken_pipe();
     let args = cli::Cli::parse();
     cli::init_logging(&args.global);

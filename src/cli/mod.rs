@@ -116,20 +116,38 @@ pub fn init_logging(g: &Global) {
         .try_init();
 }
 
-/// Keeps candle's element-wise worker pool to the calling thread unless the user chose
-/// otherwise (`CANDLE_NUM_THREADS`). candle 0.11 splits element-wise ops of 64 k
-/// elements or more (PPO's minibatches) over a pool of workers that spin up to 25,000
-/// times waiting for the next op: on 2 cores the spinning worker took 7 % of a training
-/// run's samples and the main thread 4 % more waiting for it (perf), and under load an
-/// update's optimisation took twice as long. Matrix products keep their threads
-/// (`RAYON_NUM_THREADS`); element-wise ops split into independent chunks, so the
-/// results are the same to the bit (a base.toml run's metrics.csv identical but for
+/// Sets candle's thread counts once, before any other thread exists.
+///
+/// Element-wise ops stay on the calling thread unless the user chose otherwise
+/// (`CANDLE_NUM_THREADS`). candle 0.11 splits element-wise ops of 64 k elements or more
+/// (PPO's minibatches) over a pool of workers that spin up to 25,000 times waiting for
+/// the next op: on 2 cores the spinning worker took 7 % of a training run's samples and
+/// the main thread 4 % more waiting for it (perf), and under load an update's
+/// optimisation took twice as long. Element-wise ops split into independent chunks, so
+/// the results are the same to the bit (a base.toml run's metrics.csv identical but for
 /// its timing columns).
-pub fn single_threaded_elementwise_ops() {
-    const VAR: &str = "CANDLE_NUM_THREADS";
-    if std::env::var_os(VAR).is_none() {
-        // Called first thing in `main`, before any other thread exists.
-        std::env::set_var(VAR, "1");
+///
+/// Matrix products keep candle's own thread count, but computed once: without
+/// `RAYON_NUM_THREADS` candle 0.11 counts the physical cores by reading and parsing
+/// `/proc/cpuinfo` on every matrix product (13,255 times in one update of base.toml,
+/// about 35 µs each: `strace`). `RAYON_NUM_THREADS` is set to that same count, so the
+/// products split as before (the same metrics.csv, timing aside), and rayon's global
+/// pool is built with its own default size (one thread per logical core), which the
+/// variable would otherwise change on machines with two threads per core.
+pub fn configure_candle_threads() {
+    const ELEMENTWISE: &str = "CANDLE_NUM_THREADS";
+    const PRODUCTS: &str = "RAYON_NUM_THREADS";
+    // Called first thing in `main`, before any other thread exists.
+    if std::env::var_os(ELEMENTWISE).is_none() {
+        std::env::set_var(ELEMENTWISE, "1");
+    }
+    if std::env::var_os(PRODUCTS).is_none() {
+        let products = candle_core::utils::get_num_threads();
+        std::env::set_var(PRODUCTS, products.to_string());
+        // Only fails when a global pool exists already, which then keeps its size.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(grasp::util::threads::available())
+            .build_global();
     }
 }
 
