@@ -240,4 +240,17 @@ mod tests {
         let pipe = anyhow::Error::new(std::io::Error::from(std::io::ErrorKind::BrokenPipe));
         assert!(is_broken_pipe(&pipe.context("printing")));
     }
+
+    #[test]
+    fn candle_thread_counts_are_set_once_and_a_users_choice_stays() {
+        let users = std::env::var("RAYON_NUM_THREADS").ok();
+        configure_candle_threads();
+        let set = std::env::var("RAYON_NUM_THREADS").expect("RAYON_NUM_THREADS is set");
+        if let Some(users) = users {
+            assert_eq!(set, users);
+        }
+        // candle's matrix products now read the count from the variable.
+        assert_eq!(candle_core::utils::get_num_threads().to_string(), set);
+        assert!(std::env::var("CANDLE_NUM_THREADS").is_ok());
+    }
 }
