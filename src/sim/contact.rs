@@ -516,17 +516,28 @@ pub fn table_hull_manifold(
 ) {
     let table_from_hull = if hull_first { pos12.inverse() } else { *pos12 };
     let he = table.half_extents;
-    let points = hull.points();
-    // A vertex's position in the table's frame and its height above the top face, when
-    // it is within the prediction distance over the face.
-    let near = |v: Vector| {
-        let p = table_from_hull * v;
-        let d = p.z - he.z;
-        (d <= prediction && p.x.abs() <= he.x && p.y.abs() <= he.y).then_some((p, d))
-    };
-    let deepest = points
+    // The vertices within the prediction distance over the top face, each transformed
+    // once.
+    let near: Vec<TableVertex> = hull
+        .points()
         .iter()
-        .filter_map(|v| near(*v).map(|(_, d)| d))
+        .enumerate()
+        .filter_map(|(index, v)| {
+            let at = table_from_hull * *v;
+            let height = at.z - he.z;
+            (height <= prediction && at.x.abs() <= he.x && at.y.abs() <= he.y).then_some(
+                TableVertex {
+                    index,
+                    hull: *v,
+                    at,
+                    height,
+                },
+            )
+        })
+        .collect();
+    let deepest = near
+        .iter()
+        .map(|v| v.height)
         .fold(Real::INFINITY, Real::min);
     let old = std::mem::take(&mut manifold.points);
     let down_in_hull = table_from_hull.rotation.inverse() * -Vector::Z;
@@ -540,16 +551,21 @@ pub fn table_hull_manifold(
     if deepest.is_finite() {
         let limit = deepest + TABLE_TOUCH_BAND;
         for touching in [true, false] {
-            let group = |v: Vector| near(v).filter(|(_, d)| (*d <= limit) == touching);
+            let group: Vec<TableVertex> = near
+                .iter()
+                .filter(|v| (v.height <= limit) == touching)
+                .copied()
+                .collect();
             let room = TABLE_POINTS - manifold.points.len();
-            for i in polygon_corners(points, group).take(room) {
-                let v = points[i];
-                let Some((p, d)) = near(v) else { continue };
-                let on_table = Vector::new(p.x, p.y, he.z);
-                let (fid_hull, fid_table) =
-                    (PackedFeatureId::vertex(i as u32), PackedFeatureId::face(0));
+            for k in polygon_corners(&group).take(room) {
+                let v = &group[k];
+                let on_table = Vector::new(v.at.x, v.at.y, he.z);
+                let (fid_hull, fid_table) = (
+                    PackedFeatureId::vertex(v.index as u32),
+                    PackedFeatureId::face(0),
+                );
                 manifold.points.push(TrackedContact::flipped(
-                    on_table, v, fid_table, fid_hull, d, hull_first,
+                    on_table, v.hull, fid_table, fid_hull, v.height, hull_first,
                 ));
             }
         }
@@ -557,37 +573,45 @@ pub fn table_hull_manifold(
     manifold.match_contacts(&old);
 }
 
-/// Up to four corners of the polygon that the points `group` accepts span in the table's
-/// plane: indices into `points` (see [`table_hull_manifold`]).
-fn polygon_corners(
-    points: &[Vector],
-    group: impl Fn(Vector) -> Option<(Vector, Real)>,
-) -> impl Iterator<Item = usize> {
-    // The index maximising `score` over the group (the first on ties).
-    let best = |score: &dyn Fn(usize, Vector) -> Real| {
+/// A hull vertex near the table's top face ([`table_hull_manifold`]).
+#[derive(Debug, Clone, Copy)]
+struct TableVertex {
+    /// Its index among the hull's points.
+    index: usize,
+    /// Its position in the hull's frame.
+    hull: Vector,
+    /// Its position in the table's frame.
+    at: Vector,
+    /// Its height over the top face (negative: below).
+    height: Real,
+}
+
+/// Up to four corners of the polygon `group` spans in the table's plane: positions in
+/// `group` (see [`table_hull_manifold`]).
+fn polygon_corners(group: &[TableVertex]) -> impl Iterator<Item = usize> {
+    // The position maximising `score` over the group (the first on ties).
+    let best = |score: &dyn Fn(&TableVertex) -> Real| {
         let mut found: Option<(usize, Real)> = None;
-        for (i, v) in points.iter().enumerate() {
-            if let Some((p, _)) = group(*v) {
-                let s = score(i, p);
-                if found.is_none_or(|(_, b)| s > b) {
-                    found = Some((i, s));
-                }
+        for (k, v) in group.iter().enumerate() {
+            let s = score(v);
+            if found.is_none_or(|(_, b)| s > b) {
+                found = Some((k, s));
             }
         }
         found
     };
     let mut corners = [None; 4];
-    if let Some((a, _)) = best(&|i, _| points[i].dot(FIRST_CORNER)) {
+    if let Some((a, _)) = best(&|v| v.hull.dot(FIRST_CORNER)) {
         corners[0] = Some(a);
-        let pa = group(points[a]).map_or(Vector::ZERO, |(p, _)| p);
+        let pa = group[a].at;
         let planar = |p: Vector| Vector::new(p.x - pa.x, p.y - pa.y, 0.0);
-        if let Some((b, far)) = best(&|_, p| planar(p).length_squared()) {
+        if let Some((b, far)) = best(&|v| planar(v.at).length_squared()) {
             if far > 0.0 {
                 corners[1] = Some(b);
-                let ab = planar(group(points[b]).map_or(pa, |(p, _)| p));
+                let ab = planar(group[b].at);
                 let side = |p: Vector| ab.x * planar(p).y - ab.y * planar(p).x;
-                corners[2] = best(&|_, p| side(p)).filter(|(_, s)| *s > 0.0).map(|c| c.0);
-                corners[3] = best(&|_, p| -side(p))
+                corners[2] = best(&|v| side(v.at)).filter(|(_, s)| *s > 0.0).map(|c| c.0);
+                corners[3] = best(&|v| -side(v.at))
                     .filter(|(_, s)| *s > 0.0)
                     .map(|c| c.0);
             }
@@ -1161,7 +1185,19 @@ mod tests {
                 Vector::new(a.cos(), a.sin(), 0.0)
             })
             .collect();
-        let corners: Vec<usize> = polygon_corners(&disc, |v| Some((v, 0.0))).collect();
+        let group = |points: &[Vector]| -> Vec<TableVertex> {
+            points
+                .iter()
+                .enumerate()
+                .map(|(index, v)| TableVertex {
+                    index,
+                    hull: *v,
+                    at: *v,
+                    height: 0.0,
+                })
+                .collect()
+        };
+        let corners: Vec<usize> = polygon_corners(&group(&disc)).collect();
         assert_eq!(corners.len(), 4);
         let p: Vec<Vector> = corners.iter().map(|i| disc[*i]).collect();
         // a, b, then c and d on either side of ab: the quadrilateral a c b d.
@@ -1169,7 +1205,7 @@ mod tests {
         let area = tri(p[0], p[1], p[2]) + tri(p[0], p[1], p[3]);
         assert!(area > 1.95, "{area}");
         // No point: no corner; one point: one.
-        assert_eq!(polygon_corners(&disc, |_| None).count(), 0);
-        assert_eq!(polygon_corners(&disc[..1], |v| Some((v, 0.0))).count(), 1);
+        assert_eq!(polygon_corners(&[]).count(), 0);
+        assert_eq!(polygon_corners(&group(&disc[..1])).count(), 1);
     }
 }
