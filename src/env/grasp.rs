@@ -78,7 +78,9 @@ pub struct EnvConfig {
     pub grasp_depth: f64,
     /// Duration of the stage-1 closing trajectory T (s).
     pub closing_time: f64,
-    /// Period at which stage 1 updates targets and checks the tactile sensors (s).
+    /// Period at which stage 1 updates targets and checks the tactile sensors (s),
+    /// rounded to whole physics steps: with the default 0.02 s at 1/240 s that is 5 steps
+    /// (0.0208 s), so the default's 75 updates take 1.5625 s.
     pub closing_period: f64,
     /// Where stage 1's closing trajectory T interpolates (see [`super::closing`]).
     pub closing: ClosingSpace,
