@@ -276,9 +276,9 @@ fn a_dense_mesh_is_simplified_and_simulates() {
 
 /// With `contacts.table_hull` (configs/sim_table_hull.toml) a library object rests on the
 /// table through its convex hull (one manifold of at most four points) as it did on its
-/// convex parts: no contact of the object goes more than 0.1 mm deep in its first second, with the hull and
-/// part by part, and with the hull the table carries the object's weight (averaged over
-/// the second's last tenth).
+/// convex parts: no contact of the object goes more than 0.1 mm deep in its first second,
+/// with the hull and part by part, and with the hull the table carries the object's
+/// weight (averaged over the second's last tenth).
 #[test]
 fn library_objects_rest_on_the_table_through_their_hulls() {
     let objs = specs("mug_tall,can_soup,banana,egad_c0_d0");
