@@ -602,7 +602,7 @@ impl Collider {
     ///
     /// This is the AABB used for collision detection (slightly larger than the visual shape).
     pub fn compute_collision_aabb(&self, prediction: Real) -> Aabb {
-        // Patched: a cylinder's box in closed form (parry's `Cylinder::aabb` makes six
+        // Patch: a cylinder's box in closed form (parry's `Cylinder::aabb` makes six
         // support-point queries; this runs for every moving collider every step).
         #[cfg(feature = "dim3")]
         if let Some(cylinder) = self.shape.as_cylinder() {
@@ -1532,7 +1532,7 @@ impl From<ColliderBuilder> for Collider {
     }
 }
 
-/// Patched: the world-space box of `cylinder` at `pos`, in closed form. Along each world
+/// Patch: the world-space box of `cylinder` at `pos`, in closed form. Along each world
 /// axis `e_i` the cylinder (axis `a = R y`, half height `h`, radius `r`) reaches
 /// `h |a_i| + r sqrt(1 - a_i^2)` from its centre: the same box as parry's support-map
 /// `Cylinder::aabb`, whose support point toward `e_i` is the rim point `r (d_xz / |d_xz|)

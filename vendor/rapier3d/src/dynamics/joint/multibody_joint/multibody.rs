@@ -123,9 +123,9 @@ pub struct Multibody {
     pub(crate) root_is_dynamic: bool,
     pub(crate) solver_id: u32,
     self_contacts_enabled: bool,
-    /// Whether the Coriolis and gyroscopic terms' velocity derivative joins the matrix the
-    /// free acceleration is solved with (rapier's semi-implicit treatment, the default), or
-    /// the terms act as explicit forces only (patch; MuJoCo's Euler integrator does so).
+    /// Patch: whether the Coriolis and gyroscopic terms' velocity derivative joins the
+    /// matrix the free acceleration is solved with (rapier's semi-implicit treatment, the
+    /// default), or the terms act as explicit forces only (MuJoCo's Euler integrator does so).
     implicit_coriolis: bool,
     /// Holonomic couplings between two of this multibody's generalized
     /// coordinates (`q2 = coeff·q1 + offset`), e.g. MuJoCo's
@@ -139,7 +139,7 @@ pub struct Multibody {
     coriolis_v: Vec<OMatrix<Real, Dim, Dyn>>,
     coriolis_w: Vec<OMatrix<Real, AngDim, Dyn>>,
     i_coriolis_dt: Jacobian<Real>,
-    /// Tree structure of the DoFs (patch): the parent DoF of each DoF ([`NO_PARENT`] for a
+    /// Patch: tree structure of the DoFs: the parent DoF of each DoF ([`NO_PARENT`] for a
     /// first DoF of the root), rebuilt with the mass matrix.
     dof_parent: Vec<usize>,
     /// The DoFs on which link `i`'s body Jacobian can be non-zero (its own and its
@@ -148,16 +148,16 @@ pub struct Multibody {
     link_dofs_start: Vec<usize>,
     /// `0..ndofs`: the columns of the products when the links are not in tree order.
     all_dofs: Vec<usize>,
-    /// Per link, what the DoF tree was last built from (patch): its parent, first DoF
+    /// Patch: per link, what the DoF tree was last built from: its parent, first DoF
     /// and DoF count.
     dof_tree_key: Vec<[usize; 3]>,
     /// Whether the links are in topological order, so that the tree-sparse mass-matrix
     /// products and factorisation apply (else the dense ones are used).
     tree_ordered: bool,
-    /// The DoF tree (`link_dofs_start` then `link_dofs`) under which `body_jacobians`
-    /// were last built in full (patch).
+    /// Patch: the DoF tree (`link_dofs_start` then `link_dofs`) under which
+    /// `body_jacobians` were last built in full.
     jacobian_chains: Vec<usize>,
-    /// Per link (patch): `M⁻¹ Bᵀ` (`ndofs x 6` by columns: column `k` at `[k n, (k + 1) n)`,
+    /// Patch: per link, `M⁻¹ Bᵀ` (`ndofs x 6` by columns: column `k` at `[k n, (k + 1) n)`,
     /// `B` the link's body Jacobian), computed on the first solver row of the link after
     /// the Jacobians or the factorisation changed. A row of unit wrench `f` on the link
     /// then needs `M⁻¹ Bᵀ f` (six contiguous columns combined) instead of a solve against
@@ -172,7 +172,7 @@ pub struct Multibody {
     kept_inv_mass_jacobians: Vec<std::sync::OnceLock<Vec<Real>>>,
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     rows_kept: bool,
-    /// Everything the body Jacobians were last built from (patch): per link, the joint
+    /// Patch: everything the body Jacobians were last built from: per link, the joint
     /// frame's world rotation, its shifts, locked axes, DoF offset and parent. Forward
     /// kinematics runs at the start of every step and again after the integration; when
     /// nothing changed in between, the Jacobians are kept.
@@ -431,14 +431,14 @@ impl Multibody {
         self.self_contacts_enabled = enabled;
     }
 
-    /// Whether the velocity derivative of the Coriolis and gyroscopic terms is part of the
-    /// matrix the free acceleration is solved with (patch; see
+    /// Patch: whether the velocity derivative of the Coriolis and gyroscopic terms is part
+    /// of the matrix the free acceleration is solved with (see
     /// [`Self::set_implicit_coriolis`]).
     pub fn implicit_coriolis(&self) -> bool {
         self.implicit_coriolis
     }
 
-    /// Sets how the Coriolis and gyroscopic terms are integrated (patch). `true` (rapier's
+    /// Patch: sets how the Coriolis and gyroscopic terms are integrated. `true` (rapier's
     /// default): semi-implicitly, their velocity derivative `dt dC/dv` added to the mass
     /// matrix of the free acceleration, a second (unsymmetric) matrix built and factored
     /// every step, with an energy check that falls back to the explicit terms. `false`: as
@@ -448,13 +448,13 @@ impl Multibody {
         self.implicit_coriolis = implicit;
     }
 
-    /// The inverse augmented mass matrix of this multibody: a tree-sparse `Lᵀ D L` (patch)
+    /// Patch: the inverse augmented mass matrix of this multibody: a tree-sparse `Lᵀ D L`
     /// or a dense LU, both with `solve_mut`.
     pub fn inv_augmented_mass(&self) -> &MassFactor {
         &self.inv_augmented_mass
     }
 
-    /// Rebuilds the DoF tree (patch): each DoF's parent DoF, each link's Jacobian support,
+    /// Patch: rebuilds the DoF tree: each DoF's parent DoF, each link's Jacobian support,
     /// and whether the links are in topological order.
     fn update_dof_tree(&mut self) {
         let nl = self.links.len();
@@ -919,7 +919,7 @@ impl Multibody {
         }
     }
 
-    /// Forgets every link's cached `M⁻¹ Bᵀ` (patch): called whenever the body Jacobians
+    /// Patch: forgets every link's cached `M⁻¹ Bᵀ`: called whenever the body Jacobians
     /// or the factorisation change.
     fn clear_link_inv_mass_jacobians(&mut self) {
         self.link_inv_mass_jacobians
@@ -929,7 +929,7 @@ impl Multibody {
         }
     }
 
-    /// `M⁻¹ Bᵀ` of link `i` by columns (patch), from its body Jacobian and the current
+    /// Patch: `M⁻¹ Bᵀ` of link `i` by columns, from its body Jacobian and the current
     /// factorisation.
     fn link_inv_mass_jacobian(&self, body_jacobian: &Jacobian<Real>, i: usize) -> Vec<Real> {
         let n = self.ndofs;
@@ -987,7 +987,7 @@ impl Multibody {
         }
     }
 
-    /// Records every input of the body Jacobians besides the DoF tree (patch): per link,
+    /// Patch: records every input of the body Jacobians besides the DoF tree: per link,
     /// the rotation its joint Jacobian is taken in, the shifts `shift02` and `shift23`,
     /// the locked axes, the first DoF and the parent. Returns whether all of them are
     /// bit for bit those recorded at the previous call.
@@ -1030,7 +1030,7 @@ impl Multibody {
         unchanged
     }
 
-    /// [`Self::update_body_jacobians`] over each link's chain (patch).
+    /// Patch: [`Self::update_body_jacobians`] over each link's chain.
     fn update_body_jacobians_on_chains(&mut self) {
         let chain = |i: usize| self.link_dofs_start[i]..self.link_dofs_start[i + 1];
         for i in 0..self.links.len() {
@@ -2210,9 +2210,9 @@ impl Multibody {
         }
     }
 
-    /// The rows of [`Self::fill_jacobians`] for link `i` from its cached `w = M⁻¹ Bᵀ`
-    /// (by columns; patch): `out = [J, M⁻¹ Jᵀ]` with `J = Bᵀ f` over the link's chain
-    /// `cols`; returns `(J M⁻¹ Jᵀ, J v)`.
+    /// Patch: the rows of [`Self::fill_jacobians`] for link `i` from its cached
+    /// `w = M⁻¹ Bᵀ` (by columns): `out = [J, M⁻¹ Jᵀ]` with `J = Bᵀ f` over the link's
+    /// chain `cols`; returns `(J M⁻¹ Jᵀ, J v)`.
     fn fill_link_jacobian_rows(
         &self,
         body_jacobian: &Jacobian<Real>,
@@ -2238,7 +2238,7 @@ impl Multibody {
         })
     }
 
-    /// The DoFs on which link `i`'s body Jacobian can be non-zero (patch), when the DoF
+    /// Patch: the DoFs on which link `i`'s body Jacobian can be non-zero, when the DoF
     /// tree is current (it is rebuilt with the mass matrix).
     fn link_chain(&self, i: usize) -> Option<&[usize]> {
         (self.tree_ordered && self.link_dofs_start.len() == self.links.len() + 1)
@@ -2457,7 +2457,7 @@ mod test {
     };
     use na::{DVector, RowDVector};
 
-    /// Patch round 5: with explicit Coriolis terms the free acceleration `a` solves
+    /// Patch: with explicit Coriolis terms (round 5) the free acceleration `a` solves
     /// `M a = g` with the constraints' mass matrix `M`; with rapier's semi-implicit ones it
     /// solves `(M + dt dC/dv) a = g`, the same generalised forces `g`. A spinning
     /// three-link chain (fixed root, revolute joints about different axes).
@@ -2519,7 +2519,7 @@ mod test {
         assert!((&a_explicit - &a_implicit).amax() > 0.0);
     }
 
-    /// Forward kinematics keeps its results while what it reads is unchanged (patch), and
+    /// Patch: forward kinematics keeps its results while what it reads is unchanged, and
     /// recomputes them when a coordinate, a joint frame or a body's centre of mass changes:
     /// the same poses, shifts and Jacobians as a multibody that forgot its inputs.
     #[cfg(feature = "dim3")]
@@ -2806,7 +2806,7 @@ mod test {
     }
 }
 
-/// The bits of a pose (patch): translation, then rotation.
+/// Patch: the bits of a pose: translation, then rotation.
 fn pose_bits(p: &Pose) -> [u32; 7] {
     let (t, r) = (p.translation, p.rotation);
     [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
@@ -2829,7 +2829,7 @@ fn write_link_body(
     }
 }
 
-/// `J = Bᵀ f` of a unit wrench `f` on a link over its chain `cols` (patch): `j` is zero
+/// Patch: `J = Bᵀ f` of a unit wrench `f` on a link over its chain `cols`: `j` is zero
 /// outside the chain.
 fn link_jacobian_row(
     body_jacobian: &Jacobian<Real>,

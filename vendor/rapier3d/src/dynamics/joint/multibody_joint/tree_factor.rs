@@ -1,7 +1,7 @@
 //! Tree-sparse algebra of a multibody's joint-space mass matrix.
 //!
-//! (Patch of the `grasp` project, not part of upstream rapier 0.36.1; see
-//! `vendor/README.md` of that project.)
+//! Patch: a file of the `grasp` project, not part of upstream rapier 0.36.1; see
+//! `vendor/README.md` of that project.
 //!
 //! In a kinematic tree the mass matrix `M` has an entry `(a, b)` only where DoF `a` is an
 //! ancestor of DoF `b` or the reverse, because the body Jacobian of a link is zero outside

@@ -675,7 +675,7 @@ impl GenericContactConstraint {
         }
     }
 
-    /// Whether some row still waits for its `M⁻¹ Jᵀ` (patch).
+    /// Patch: whether some row still waits for its `M⁻¹ Jᵀ`.
     pub fn has_pending_rows(&self) -> bool {
         self.friction_pending != 0 || self.normal_pending != 0
     }
@@ -866,7 +866,7 @@ impl GenericContactConstraint {
         );
     }
 
-    /// Solves the rows without completing pending ones (patch: rapier's `solve`). A pending
+    /// Patch: solves the rows without completing pending ones (rapier's `solve`). A pending
     /// normal row is solved with its `J` and the rigid share as its `r`, which is right
     /// only where its impulse cannot turn positive: the restitution pass, which zeroes the
     /// `r` of every row that did not push; pending friction rows must be left out.
@@ -930,7 +930,7 @@ impl GenericContactConstraint {
         self.store_solver_vels(bodies, vels);
     }
 
-    /// The normal rows of `generic_solve_group` (patch), a pending row skipped while its
+    /// Patch: the normal rows of `generic_solve_group`, a pending row skipped while its
     /// impulse is zero and its relative velocity `J v + rhs` is not negative (its impulse
     /// stays zero: `max(0 - r dvel, 0)`), completed when it is about to push.
     fn solve_normals_building(
