@@ -7,7 +7,9 @@
 //!   UR10e kinematics.
 //! - [`synergy`]: pose datasets and PCA hand synergies (P and P^-1 of eq. 2).
 //! - [`objects`]: primitives, meshes, procedural shapes, object sets.
-//! - [`hardware`]: the robot interface, sensor mapping, safety layer, logs, point clouds.
+//! - [`hardware`]: the robot interface, sensor mapping, safety layer, logs.
+//! - [`perception`]: point clouds, the simulated depth cameras and the antipodal pre-grasp
+//!   planner (used by the environment and by `grasp run`).
 //! - [`sim`]: the Rapier simulation of hand, table and object, with tactile and torque sensing.
 //! - [`util`]: small shared helpers (atomic file writes, TOML configs).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
@@ -28,6 +30,7 @@ pub mod eval;
 pub mod experiment;
 pub mod hardware;
 pub mod objects;
+pub mod perception;
 pub mod policy;
 pub mod ppo;
 #[cfg(feature = "python")]

@@ -295,3 +295,30 @@ fn the_procedural_stream_lists_exports_and_checks_its_flags() {
     );
     assert_fails(&o, &["--count 0 must be in 1..=10000"]);
 }
+
+#[test]
+fn validation_set_is_its_own_stream_seed_and_not_a_list_item() {
+    // `validation`: objects 0..24 of stream seed 1000, disjoint from the `procedural` set
+    // (stream seed 0) and from the built-in train and unseen names; like a set name, it
+    // cannot be one item of a comma-separated list.
+    let cache = tempfile::tempdir().unwrap();
+    let o = grasp(
+        cache.path(),
+        &["objects", "list", "--set", "validation", "--json"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let names: Vec<String> = rows
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap().to_string())
+        .collect();
+    let expected: Vec<String> = (0..24).map(|i| format!("proc-1000-{i}")).collect();
+    assert_eq!(names, expected);
+    let o = grasp(
+        cache.path(),
+        &["objects", "list", "--set", "box_sugar,validation"],
+    );
+    assert_fails(&o, &["validation"]);
+}

@@ -812,3 +812,38 @@ fn resume_refuses_a_changed_environment_unless_asked() {
     ]));
     assert!(out.contains("(1 new)"), "{out}");
 }
+
+#[test]
+fn milestones_keep_a_checkpoint_every_n_updates() {
+    // milestone_every = 2 on a 3-update cart-pole run (64 transitions per update): one
+    // milestone, after update 2, named by its transitions, loadable as a checkpoint folder
+    // (config.toml beside it), and the resolved config keeps the setting.
+    let tmp = tempfile::tempdir().unwrap();
+    let base = cartpole_config(tmp.path(), 192);
+    let text = std::fs::read_to_string(&base).unwrap();
+    let cfg = write(
+        tmp.path(),
+        "ms.toml",
+        &text.replace(
+            "checkpoint_every = 1\n",
+            "checkpoint_every = 1\nmilestone_every = 2\n",
+        ),
+    );
+    let run = tmp.path().join("run");
+    ok(&grasp(&["train", "--config", s(&cfg), "--out", s(&run)]));
+    let mut kept: Vec<String> = std::fs::read_dir(run.join("checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("step_"))
+        .collect();
+    kept.sort();
+    assert_eq!(kept, vec!["step_128".to_string()]);
+    let ms = run.join("checkpoints/step_128");
+    assert!(ms.join("checkpoint.safetensors").is_file());
+    assert_eq!(
+        TrainConfig::load(&ms.join("config.toml"))
+            .unwrap()
+            .milestone_every,
+        2
+    );
+}

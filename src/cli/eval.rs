@@ -6,15 +6,14 @@ use grasp::env::api::Env;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
-use grasp::env::pregrasp::{PlannedGrasp, PregraspPlanner};
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{write_index, RecordOptions};
 use grasp::eval::{
     checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
     physics_line, read_results, AgentResult, AgentSpec, PregraspStats,
 };
+use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
-use grasp::run::pregrasp::AntipodalPregrasp;
 use grasp::sim::{HandSim, SimConfig};
 use grasp::util::fsx::write_atomic;
 use std::path::{Path, PathBuf};
@@ -50,7 +49,7 @@ pub struct EvalArgs {
     /// (one per agent, separated by commas).
     #[arg(long, value_delimiter = ',')]
     pub labels: Vec<String>,
-    /// Objects: train, unseen, all, a folder of OBJ/STL, a manifest.toml, or names.
+    /// Objects: train, unseen, all, validation (choose checkpoints on it), procedural, a folder of OBJ/STL, a manifest.toml, or names.
     #[arg(long, default_value = "unseen")]
     pub objects: String,
     /// Trials per object.

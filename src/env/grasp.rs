@@ -30,10 +30,11 @@ use super::curriculum::{Curriculum, CurriculumConfig};
 use super::object_curriculum::{ObjectCurriculum, ObjectCurriculumConfig};
 use super::obs::{surface_vectors, FrameStack, Modality, ObsLayout, N_SURFACE};
 use super::phases::{Phase, PhaseTally};
-use super::pregrasp::{PlannedGrasp, PregraspPlanner};
+use super::placement::PlacementConfig;
 use super::randomize::Randomization;
 use super::reward::{self, RewardConfig};
 use super::stream::{ObjectStream, StreamConfig};
+use crate::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use crate::robot::{Posture, Robot};
 use crate::sim::{
     script, FailureReport, HandSim, LiftOutcome, ObjectSpec, PhysicsFailure, Scene, SimConfig,
@@ -59,6 +60,10 @@ pub enum AtMaxSteps {
 
 /// Most 5 mm steps a reset raises the hand to start clear of the object.
 const CLEARANCE_STEPS: usize = 20;
+
+/// Lowest grasp point a height perturbation of `[env.placement]` moves to (m above the
+/// table).
+const MIN_PERTURBED_HEIGHT: f64 = 0.01;
 
 /// Settings of the grasping MDP.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -103,6 +108,9 @@ pub struct EnvConfig {
     /// [`super::obs::critic_state`], privileged simulator state that only the critic
     /// reads; the actor keeps the modality's observation.
     pub critic_state: bool,
+    /// Where training episodes start the hand (beyond the paper, off by default; see
+    /// [`super::placement`]); evaluation turns it off.
+    pub placement: PlacementConfig,
 }
 
 impl Default for EnvConfig {
@@ -127,6 +135,7 @@ impl Default for EnvConfig {
             stream: StreamConfig::default(),
             reward: RewardConfig::default(),
             critic_state: false,
+            placement: PlacementConfig::default(),
         }
     }
 }
@@ -220,6 +229,9 @@ impl EnvConfig {
         if let Err((field, message)) = self.reward.validate() {
             return bad(field, message);
         }
+        if let Err((field, message)) = self.placement.validate() {
+            return bad(field, message);
+        }
         if self.stream.reuse == 0 {
             return bad("stream.reuse", "must be at least 1".into());
         }
@@ -306,6 +318,9 @@ pub struct GraspEnv {
     phases: PhaseTally,
     /// The planner of the hand's start, when not the default top-down placement.
     pregrasp: Option<Box<dyn PregraspPlanner>>,
+    /// Whether every episode starts from `pregrasp`'s plan (`grasp eval --pregrasp`)
+    /// rather than the share `[env.placement] antipodal` draws.
+    pregrasp_always: bool,
     done: bool,
 }
 
@@ -333,6 +348,9 @@ impl GraspEnv {
         let (start, closed) = (posture.angles(), script::power_grasp());
         let path = ClosingPath::new(cfg.closing, &start, &closed, &synergy, &finger_limits);
         let n_objects = objects.len();
+        // Training's share of pre-grasp starts plans as `grasp run` does.
+        let pregrasp = (cfg.placement.antipodal > 0.0)
+            .then(|| Box::new(AntipodalPregrasp::default()) as Box<dyn PregraspPlanner>);
         Ok(GraspEnv {
             start,
             closed,
@@ -359,15 +377,18 @@ impl GraspEnv {
             lift_grip: None,
             last: None,
             phases: PhaseTally::default(),
-            pregrasp: None,
+            pregrasp,
+            pregrasp_always: false,
             done: true,
         })
     }
 
     /// Starts every episode (policy and baseline alike) from `planner`'s placement
-    /// instead of the default top-down one (see [`super::pregrasp`]).
+    /// instead of the default top-down one (see [`crate::perception::pregrasp`]),
+    /// whatever `[env.placement]` says of the share.
     pub fn with_pregrasp(mut self, planner: Box<dyn PregraspPlanner>) -> Self {
         self.pregrasp = Some(planner);
+        self.pregrasp_always = true;
         self
     }
 
@@ -485,16 +506,32 @@ impl GraspEnv {
         // The hand starts clear of the object: where the start posture would overlap a
         // large object, the hand is raised in 5 mm steps (at most 10 cm).
         self.sim.reset(&scene)?;
-        if let Some(planner) = self.pregrasp.as_mut() {
+        let draw = self.cfg.placement.draw(seed);
+        let mut moved = false;
+        if self.pregrasp_always || draw.antipodal {
             // No plan (or a non-finite one): the default placement stands.
-            if let Some(g) = planner
-                .plan(&self.sim, seed)
+            if let Some(g) = self
+                .pregrasp
+                .as_mut()
+                .and_then(|planner| planner.plan(&self.sim, seed))
                 .filter(PlannedGrasp::is_finite)
             {
                 scene.grasp_point = g.grasp_point;
                 scene.hand_yaw = g.hand_yaw;
-                self.sim.reset(&scene)?;
+                moved = true;
             }
+        }
+        if draw.shift != [0.0; 3] || draw.yaw != 0.0 {
+            let [dx, dy, dz] = draw.shift;
+            let [x, y, z] = scene.grasp_point;
+            // Lowered at most to MIN_PERTURBED_HEIGHT above the table (never below where
+            // the placement put it).
+            scene.grasp_point = [x + dx, y + dy, (z + dz).max(z.min(MIN_PERTURBED_HEIGHT))];
+            scene.hand_yaw += draw.yaw;
+            moved = true;
+        }
+        if moved {
+            self.sim.reset(&scene)?;
         }
         for _ in 0..CLEARANCE_STEPS {
             if !self.sim.hand_overlaps_object() {
@@ -1019,6 +1056,78 @@ mod tests {
             let p = palm(&mut env(Some(none)));
             assert!((p.translation.vector - p0.translation.vector).norm() < 1e-9);
         }
+    }
+
+    #[test]
+    fn placement_moves_the_hand_by_its_draw_and_keeps_the_object_pose() {
+        // [env.placement] with an offset, a yaw and no height change: the palm moves by
+        // exactly the drawn horizontal shift and turns by the drawn yaw about z, and the
+        // object starts where it does without placement settings (the placement draws
+        // from its own generator). With antipodal = 1 the env's own planner places the
+        // hand (the default box is 6.5 cm wide: a plan exists and moves the palm).
+        let env_with = |placement: PlacementConfig| {
+            GraspEnv::new(
+                &Robot::builtin(Side::Left),
+                vec![("box".to_string(), ObjectSpec::default_box())],
+                crate::synergy::default_model(),
+                SimConfig::default(),
+                EnvConfig {
+                    placement,
+                    ..EnvConfig::default()
+                },
+            )
+            .expect("env")
+        };
+        let start = |e: &mut GraspEnv, seed| {
+            e.reset_scene(seed).expect("scene");
+            (
+                e.sim.critic_geometry().expect("geometry").palm,
+                e.sim.object_pose_raw(),
+            )
+        };
+        let shifted = PlacementConfig {
+            yaw: 0.3,
+            offset: 0.02,
+            ..PlacementConfig::default()
+        };
+        for seed in [3, 11] {
+            let (p0, o0) = start(&mut box_env(), seed);
+            let (p1, o1) = start(&mut env_with(shifted), seed);
+            assert_eq!(o0, o1, "the object's start pose");
+            let d = shifted.draw(seed);
+            assert!(!d.antipodal);
+            let expected_turn =
+                nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), d.yaw);
+            let turn = p1.rotation * p0.rotation.inverse();
+            assert!(turn.angle_to(&expected_turn) < 1e-5, "seed {seed}");
+            // The palm turns about the grasp point: compare grasp points, i.e. undo the
+            // turn about the default grasp point before comparing positions.
+            let g = Scene::top_down(
+                &ObjectSpec::default_box(),
+                box_env().path.start(),
+                EnvConfig::default().grasp_depth,
+                0.0,
+            )
+            .grasp_point;
+            let g = nalgebra::Vector3::new(g[0], g[1], g[2]);
+            let shift = nalgebra::Vector3::from(d.shift);
+            let unturned = turn.inverse() * (p1.translation.vector - g - shift) + g;
+            assert!(
+                (unturned - p0.translation.vector).norm() < 1e-5,
+                "seed {seed}: {unturned} against {}",
+                p0.translation.vector
+            );
+        }
+        let planned = PlacementConfig {
+            antipodal: 1.0,
+            ..PlacementConfig::default()
+        };
+        let (p0, _) = start(&mut box_env(), 5);
+        let (p1, _) = start(&mut env_with(planned), 5);
+        assert!((p1.translation.vector - p0.translation.vector).norm() > 1e-4);
+        // An evaluation's env (placement turned off) is the default.
+        let (p2, _) = start(&mut env_with(PlacementConfig::default()), 5);
+        assert!((p2.translation.vector - p0.translation.vector).norm() < 1e-9);
     }
 
     #[test]

@@ -10,7 +10,9 @@
 //! - [`curriculum`]: eq. 6.
 //! - [`randomize`]: per-episode domain randomisation (object and sensor noise).
 //! - [`stream`]: training on the procedural object stream.
-//! - [`pregrasp`]: planned hand placements (the hook `grasp eval --pregrasp` uses).
+//! - [`placement`]: where an episode's hand starts: the top-down default, the antipodal
+//!   pre-grasp ([`crate::perception::pregrasp`]) and their mix and perturbations in
+//!   training (`[env.placement]`).
 //! - [`grasp`]: the grasping environment (stages 1 and 2, lift) and the scripted baselines.
 //! - [`cartpole`]: continuous CartPole, the learner's textbook check.
 
@@ -24,7 +26,7 @@ pub mod grasp;
 pub mod object_curriculum;
 pub mod obs;
 pub mod phases;
-pub mod pregrasp;
+pub mod placement;
 pub mod randomize;
 pub mod reward;
 pub mod stream;

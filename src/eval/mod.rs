@@ -447,7 +447,7 @@ pub fn physics_line(r: &AgentResult) -> String {
 /// random numbers), and keyed by the object's name rather than its place in the list, so
 /// a trial has the same start pose in any object list or set that contains the object.
 pub fn trial_seed(seed: u64, object: &str, trial: usize) -> u64 {
-    let mut h = crate::objects::decomp::Fnv128::new();
+    let mut h = crate::util::hash::Fnv128::new();
     h.write(object.as_bytes());
     let key = h.finish();
     crate::env::api::episode_seed(seed, (key ^ (key >> 64)) as u64 as usize, trial as u64)
@@ -694,6 +694,8 @@ pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError
     // in turn.
     env.randomization.enabled = false;
     env.object_curriculum.enabled = false;
+    // Placement is the evaluation's choice (`--pregrasp`), the same for every agent.
+    env.placement = Default::default();
     Ok(Some(CheckpointSetup {
         env,
         n_components: cfg.n_components,

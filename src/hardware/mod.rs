@@ -11,19 +11,21 @@
 //! - [`torque`]: tendon-force drift compensation (`tau_j - tau_j0`) and torque levels.
 //! - [`safety`]: joint-limit and step clamping, the sensor watchdog, the safe wrapper.
 //! - [`log`]: JSON-lines attempt logs that survive a crash.
-//! - [`pointcloud`]: PCD/PLY readers, normals, antipodal two-finger grasp candidates.
-//! - [`partial_view`]: synthetic surface samples and partial-view clouds with noise.
+//! - [`pointcloud`] and [`partial_view`]: re-exported from [`crate::perception`] (PCD/PLY
+//!   readers, antipodal candidates, synthetic partial views).
 //! - `ros` (cargo feature `ros`): a rosbridge v2 client implementing [`HandArm`] for the
 //!   Shadow hand's ROS 1 driver and the UR10e.
 
 pub mod calibration;
 pub mod log;
-pub mod partial_view;
-pub mod pointcloud;
 #[cfg(feature = "ros")]
 pub mod ros;
 pub mod safety;
 pub mod torque;
+
+// The point-cloud code lives below the environment layer (the antipodal pre-grasp is
+// planned in training too); these paths stay for the robot-facing code.
+pub use crate::perception::{partial_view, pointcloud};
 
 use crate::robot::joints::HAND_JOINTS;
 

@@ -8,9 +8,9 @@
 //!   is [`default_cache_dir`] (`$GRASP_CACHE_DIR`, else `$XDG_CACHE_HOME/grasp`, else
 //!   `~/.cache/grasp`).
 //!
-//! The cache key ([`cache_key`]) is a 128-bit FNV-1a digest ([`Fnv128`]) of a format tag,
-//! the mesh content (every vertex coordinate's bits and every index, in order) and every
-//! decomposition parameter. A cache file whose key differs (stale) or that cannot be
+//! The cache key ([`cache_key`]) is a 128-bit FNV-1a digest ([`Fnv128`]) of a format
+//! tag, the mesh content (every vertex coordinate's bits and every index, in order) and
+//! every decomposition parameter. A cache file whose key differs (stale) or that cannot be
 //! parsed (corrupt) is rebuilt with a `tracing` warning; a cache that cannot be written
 //! (read-only folder) only costs a warning. Files are written with
 //! [`crate::util::fsx::write_atomic`].
@@ -18,6 +18,7 @@
 use super::mesh::TriMesh;
 use super::{ConvexHull, ObjectError};
 use crate::util::fsx::write_atomic;
+use crate::util::hash::Fnv128;
 use parry3d::math::Vector;
 use parry3d::transformation::vhacd::{VHACDParameters, VHACD};
 use parry3d::transformation::voxelization::FillMode;
@@ -26,45 +27,6 @@ use std::path::{Path, PathBuf};
 /// Version of the cache file layout; part of the key, so a layout change invalidates old
 /// files.
 pub const CACHE_FORMAT: u32 = 1;
-
-/// The 128-bit FNV-1a hash (offset basis `0x6c62272e07bb014262b821756295c58d`, prime
-/// `2^88 + 0x13b`). Stable across platforms and releases, unlike `std`'s `DefaultHasher`;
-/// not cryptographic, which a cache key does not need.
-#[derive(Debug, Clone, Copy)]
-pub struct Fnv128 {
-    state: u128,
-}
-
-impl Default for Fnv128 {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl Fnv128 {
-    const OFFSET: u128 = 0x6c62_272e_07bb_0142_62b8_2175_6295_c58d;
-    const PRIME: u128 = 0x0000_0000_0100_0000_0000_0000_0000_013b;
-
-    /// A hasher in its initial state.
-    pub fn new() -> Self {
-        Fnv128 {
-            state: Self::OFFSET,
-        }
-    }
-
-    /// Feeds `bytes`.
-    pub fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.state ^= b as u128;
-            self.state = self.state.wrapping_mul(Self::PRIME);
-        }
-    }
-
-    /// The digest of everything written so far.
-    pub fn finish(&self) -> u128 {
-        self.state
-    }
-}
 
 /// VHACD settings. The defaults keep a typical object (a few thousand triangles) well under
 /// a second in an optimised build while giving at most 16 hulls.
@@ -355,18 +317,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn fnv128_reference_values() {
-        // FNV-1a 128 of the empty string is the offset basis; of "a" the published value.
-        assert_eq!(Fnv128::new().finish(), 0x6c62272e07bb014262b821756295c58d);
-        let mut h = Fnv128::new();
-        h.write(b"a");
-        assert_eq!(h.finish(), 0xd228cb696f1a8caf78912b704e4a8964);
-    }
-
-    #[test]
     fn merging_joins_the_cheapest_pair_first() {
         let cube = |x: f64| {
-            ConvexHull::from_points(&crate::objects::procedural::box_points(
+            ConvexHull::from_points(&crate::objects::shape_kit::box_points(
                 [x, 0.0, 0.0],
                 [0.5, 0.5, 0.5],
             ))
@@ -386,7 +339,7 @@ mod tests {
 
     #[test]
     fn key_depends_on_params_and_mesh() {
-        let m = crate::objects::procedural::box_mesh([0.05, 0.04, 0.03]);
+        let m = crate::objects::shape_kit::box_mesh([0.05, 0.04, 0.03]);
         let p = DecompParams::default();
         let k = cache_key(&m, &p);
         assert_eq!(k.len(), 32);

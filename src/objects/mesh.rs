@@ -566,9 +566,9 @@ impl TriMesh {
     }
 
     /// A stable 128-bit digest of the mesh content (vertex bits and indices), see
-    /// [`super::decomp::Fnv128`].
+    /// [`crate::util::hash::Fnv128`].
     pub fn content_hash(&self) -> u128 {
-        let mut h = super::decomp::Fnv128::new();
+        let mut h = crate::util::hash::Fnv128::new();
         h.write(&(self.vertices.len() as u64).to_le_bytes());
         for v in &self.vertices {
             for x in v {

@@ -2,8 +2,9 @@
 //!
 //! The paper trains on 61 objects (YCB, ShapeNet, EGAD and primitive shapes) and tests on
 //! unseen ones. Those files cannot be shipped, so this module generates a comparable
-//! library deterministically ([`procedural`], [`sets`]) and reads any user's OBJ/STL meshes
-//! ([`mesh`]) or TOML manifests ([`spec`]).
+//! library deterministically ([`procedural`] shapes from [`shape_kit`]'s constructions,
+//! the [`builtin`] sets, [`build`] and the [`sets`] resolver) and reads any user's OBJ/STL
+//! meshes ([`mesh`]) or TOML manifests ([`spec`]).
 //!
 //! # Object frame
 //!
@@ -32,12 +33,15 @@
 //! clustering first, because the contact queries scan a hull's vertices and parry's
 //! convex polyhedron failed (index out of bounds) on such hulls.
 
+pub mod build;
+pub mod builtin;
 pub mod decomp;
 pub mod mesh;
 pub mod procedural;
 pub mod random_shapes;
 pub mod rest;
 pub mod sets;
+pub mod shape_kit;
 pub mod spec;
 pub mod stream;
 

@@ -6,7 +6,7 @@
 //! families of [`super::procedural`]: wedges, kites, irregular and non-convex prisms,
 //! and totem-like unions of boxes and cylinders.
 
-use super::procedural::{box_points, cylinder_points, Assembly, Generated, Params};
+use super::shape_kit::{box_points, cylinder_points, Assembly, Generated, Params};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::TAU;

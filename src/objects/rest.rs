@@ -282,7 +282,7 @@ mod tests {
         // An ellipsoid (semi-axes 5, 3, 1.5 cm) made standing on its long axis: every
         // facet is barely stable, so it is laid on its flattest side, the centre of mass
         // about 1.5 cm high (the tessellation flattens it slightly).
-        let mut egg = crate::objects::procedural::icosphere(3);
+        let mut egg = crate::objects::shape_kit::icosphere(3);
         egg.scale([0.015, 0.03, 0.05]);
         let hull = convex_hull_mesh(&egg.vertices).unwrap();
         let r = rest_rotation(&hull, [0.0; 3]).expect("turned");

@@ -26,14 +26,17 @@
 //! stream object can be shown or exported by name.
 //!
 //! # Finite views
-//! The `--objects procedural` set is the first [`DEFAULT_COUNT`] objects of stream seed 0;
+//! The `--objects procedural` set is the first [`DEFAULT_COUNT`] objects of stream seed 0,
+//! and `--objects validation` the first [`VALIDATION_COUNT`] of stream seed
+//! [`VALIDATION_SEED`], the set checkpoints are chosen on;
 //! `grasp objects list --set procedural --count N --seed S` lists others. Training on the
 //! stream (`objects = "procedural"` in a training config) draws a fresh index per object
 //! from each episode's seed (see `env::stream`).
 
+use super::build::{prepare, Prepared, ResolvedSpec};
+use super::builtin::unseen_set;
 use super::procedural::ParamDef;
 use super::procedural::GENERATORS;
-use super::sets::{prepare, unseen_set, Prepared, ResolvedSpec};
 use super::spec::{ObjectKind, ObjectSpec, ShapeSpec};
 use super::ObjectError;
 use rand::{Rng, RngCore, SeedableRng};
@@ -45,6 +48,19 @@ pub const STREAM_SET: &str = "procedural";
 
 /// Objects in the finite `procedural` set (stream seed 0).
 pub const DEFAULT_COUNT: usize = 64;
+
+/// The validation set's name in `--objects`: objects `0..VALIDATION_COUNT` of stream seed
+/// [`VALIDATION_SEED`]. It is neither a training set nor a test set: checkpoints and
+/// recipes are chosen on it, and the unseen objects and the novel meshes are kept for
+/// the report. Its shapes are drawn away from the unseen set's as every stream object's
+/// are, and training on the stream (stream seed 0 by default) never draws from this seed.
+pub const VALIDATION_SET: &str = "validation";
+
+/// The stream seed of the validation set.
+pub const VALIDATION_SEED: u64 = 1000;
+
+/// Objects in the validation set.
+pub const VALIDATION_COUNT: usize = 24;
 
 /// Range of the narrowest horizontal width (m): what a Shadow hand spans in a top-down
 /// grasp.

@@ -11,12 +11,9 @@
 //! - [`pipeline`]: grasp planning (a given two-finger grasp or antipodal candidates on a
 //!   point cloud, the hand mapping, UR10e IK) and the attempt (stage 1, the policy, the
 //!   lift), logged step by step.
-//! - [`pregrasp`]: that planner on the simulated depth cloud as an episode start
-//!   (`grasp eval --pregrasp antipodal`).
 
 pub mod calibrate;
 pub mod pipeline;
-pub mod pregrasp;
 pub mod sim_backend;
 
 use crate::hardware::calibration::CalibrationError;

@@ -42,6 +42,7 @@ use crate::hardware::pointcloud::{grasp_candidates, AntipodalConfig};
 use crate::hardware::safety::{SafeHandArm, SafetyConfig};
 use crate::hardware::torque::{TorqueMapper, REAL_THRESHOLDS};
 use crate::hardware::{ArmMotion, HandArm, RawSensors, N_HAND_JOINTS, N_TENDONS};
+use crate::perception::pregrasp::{snap_top_down, DEFAULT_MAX_CANDIDATES, DEFAULT_MAX_TILT_RAD};
 use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
 use crate::robot::{ur10e, Posture, Robot};
 use crate::sim::script;
@@ -130,8 +131,8 @@ impl Default for PipelineConfig {
             preshape: "policy".into(),
             pregrasp_offset_m: 0.10,
             top_down_only: false,
-            max_tilt_rad: 0.35,
-            max_candidates: 30,
+            max_tilt_rad: DEFAULT_MAX_TILT_RAD,
+            max_candidates: DEFAULT_MAX_CANDIDATES,
             baseline_readings: crate::hardware::torque::DEFAULT_BASELINE_READINGS,
             baseline_period_s: 0.02,
             control_period_s: 0.2,
@@ -362,21 +363,6 @@ fn solve_arm(
     let q_pre = ur10e::ik(&(base_inv * pre), &ur10e::HOME).map_err(|e| ik_err("pre-grasp", e))?;
     let q_grasp = ur10e::ik(&(base_inv * root), &q_pre).map_err(|e| ik_err("grasp", e))?;
     Ok((q_pre, q_grasp))
-}
-
-/// Makes a candidate exactly top-down (approach -z, horizontal closing direction) if it is
-/// within `max_tilt` of it.
-pub(crate) fn snap_top_down(g: &TwoFingerGrasp, max_tilt: f64) -> Option<TwoFingerGrasp> {
-    let a = g.approach.try_normalize(1e-9)?;
-    if a.angle(&-Vector3::z()) > max_tilt {
-        return None;
-    }
-    let closing = Vector3::new(g.closing.x, g.closing.y, 0.0).try_normalize(1e-6)?;
-    Some(TwoFingerGrasp {
-        center: g.center,
-        approach: -Vector3::z(),
-        closing,
-    })
 }
 
 /// Plans the grasp (see the module docs) with the hand in `preshape` (see
@@ -945,27 +931,6 @@ mod tests {
             cloud_surface_vectors(&robot, &root, &q, &[]),
             [0.0; N_SURFACE]
         );
-    }
-
-    #[test]
-    fn snap_top_down_hand_computed() {
-        // Approach tilted by atan(0.1) ~ 0.0997 rad: kept, made exactly vertical; the
-        // closing direction (3, 4, 1) loses its vertical part -> (0.6, 0.8, 0).
-        let g = TwoFingerGrasp {
-            center: Point3::new(0.1, 0.2, 0.3),
-            approach: Vector3::new(0.1, 0.0, -1.0),
-            closing: Vector3::new(3.0, 4.0, 1.0),
-        };
-        let s = snap_top_down(&g, 0.1).unwrap();
-        assert_eq!(s.approach, -Vector3::z());
-        assert!((s.closing - Vector3::new(0.6, 0.8, 0.0)).norm() < 1e-12);
-        assert_eq!(s.center, g.center);
-        assert!(snap_top_down(&g, 0.09).is_none());
-        let vertical = TwoFingerGrasp {
-            closing: Vector3::z(),
-            ..g
-        };
-        assert!(snap_top_down(&vertical, 0.2).is_none());
     }
 
     #[test]

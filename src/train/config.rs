@@ -16,7 +16,8 @@
 //! mistyped key is reported with the file, line and column where it was written.
 //!
 //! Top-level keys: `name`, `seed`, `total_timesteps`, `num_envs`, `threads` (environment
-//! pool; default: the available cores), `checkpoint_every` (updates), `plot_every`
+//! pool; default: the available cores), `checkpoint_every` (updates), `milestone_every`
+//! (updates between kept copies `checkpoints/step_<transitions>`; 0, the default: none), `plot_every`
 //! (updates), `best_window` (updates averaged to pick the best checkpoint),
 //! `time_budget_minutes`, `objects`, `synergy` (path of a model JSON), `n_components`,
 //! `sim_config` (path of a simulator TOML; built-in defaults when absent). Tables: `[ppo]`
@@ -33,6 +34,7 @@ use crate::env::curriculum::CurriculumConfig;
 use crate::env::grasp::{AtMaxSteps, EnvConfig};
 use crate::env::object_curriculum::ObjectCurriculumConfig;
 use crate::env::obs::Modality;
+use crate::env::placement::PlacementConfig;
 use crate::env::randomize::Randomization;
 use crate::env::reward::RewardConfig;
 use crate::env::stream::StreamConfig;
@@ -91,6 +93,10 @@ pub struct TrainConfig {
     pub threads: Option<usize>,
     /// Save `checkpoints/latest` every this many updates (and at the end).
     pub checkpoint_every: u64,
+    /// Keep a copy of the checkpoint every this many updates as
+    /// `checkpoints/step_<transitions>` (0: none), for choosing among a run's checkpoints
+    /// on a validation set afterwards.
+    pub milestone_every: u64,
     /// Redraw `learning_curve.svg` every this many updates (and at the end).
     pub plot_every: u64,
     /// Updates averaged when choosing `checkpoints/best`.
@@ -139,6 +145,7 @@ struct EnvSection {
     stream: Option<StreamConfig>,
     reward: Option<RewardConfig>,
     critic_state: Option<bool>,
+    placement: Option<PlacementConfig>,
 }
 
 /// One file (or the merged chain): every key optional.
@@ -152,6 +159,7 @@ struct FileSchema {
     num_envs: Option<usize>,
     threads: Option<usize>,
     checkpoint_every: Option<u64>,
+    milestone_every: Option<u64>,
     plot_every: Option<u64>,
     best_window: Option<usize>,
     time_budget_minutes: Option<f64>,
@@ -327,6 +335,7 @@ impl TrainConfig {
             stream: e.stream.unwrap_or(d.stream),
             reward: e.reward.unwrap_or(d.reward),
             critic_state: e.critic_state.unwrap_or(d.critic_state),
+            placement: e.placement.unwrap_or(d.placement),
         };
         let ppo_defaults = PpoConfig::default();
         let cfg = TrainConfig {
@@ -336,6 +345,7 @@ impl TrainConfig {
             num_envs: f.num_envs.unwrap_or(ppo_defaults.num_envs),
             threads: f.threads,
             checkpoint_every: f.checkpoint_every.unwrap_or(1),
+            milestone_every: f.milestone_every.unwrap_or(0),
             plot_every: f.plot_every.unwrap_or(5),
             best_window: f.best_window.unwrap_or(10),
             time_budget_minutes: f.time_budget_minutes,
@@ -499,6 +509,10 @@ impl TrainConfig {
         }
         let every = i64::try_from(self.checkpoint_every).map_err(|e| err(&e))?;
         t.insert("checkpoint_every".into(), every.into());
+        if self.milestone_every > 0 {
+            let m = i64::try_from(self.milestone_every).map_err(|e| err(&e))?;
+            t.insert("milestone_every".into(), m.into());
+        }
         let plot = i64::try_from(self.plot_every).map_err(|e| err(&e))?;
         t.insert("plot_every".into(), plot.into());
         t.insert("best_window".into(), (self.best_window as i64).into());

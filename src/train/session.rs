@@ -40,6 +40,12 @@ pub struct OpenOptions {
     pub allow_env_change: bool,
 }
 
+/// The milestone checkpoint folder of run folder `dir` after `transitions`
+/// (`milestone_every`).
+pub fn milestone_dir(dir: &Path, transitions: u64) -> PathBuf {
+    dir.join("checkpoints").join(format!("step_{transitions}"))
+}
+
 /// The latest checkpoint folder of run folder `dir`.
 pub fn latest_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoints").join("latest")
@@ -562,6 +568,10 @@ impl TrainSession {
             if u.is_multiple_of(self.cfg.checkpoint_every) {
                 self.save_checkpoint(&latest_dir(&self.dir))?;
                 saved_at = u;
+            }
+            if self.cfg.milestone_every > 0 && u.is_multiple_of(self.cfg.milestone_every) {
+                let step = self.trainer.global_step();
+                self.save_checkpoint(&milestone_dir(&self.dir, step))?;
             }
             if u.is_multiple_of(self.cfg.plot_every) {
                 self.plot()?;

@@ -1,8 +1,9 @@
-//! Small helpers shared across the crate: atomic writes, TOML configuration loading, the
-//! torque levels, thread counts, numbers in messages and the statistics of measurements.
+//! Small helpers shared across the crate: atomic writes, TOML configuration loading, a
+//! stable hash, the torque levels, thread counts, numbers in messages and the statistics of measurements.
 
 pub mod config;
 pub mod fsx;
+pub mod hash;
 pub mod levels;
 pub mod num;
 pub mod stats;
