@@ -318,3 +318,112 @@ fn recordings_are_never_overwritten() {
     assert_fails(&o, &["already holds recordings", "index.html"]);
     assert!(!stderr(&o).contains("evaluating"), "{}", stderr(&o));
 }
+
+/// The `global_step` of the last row of `run`'s metrics.csv.
+fn last_global_step(run: &Path) -> u64 {
+    let text = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    let rows = grasp::train::metrics::parse_csv(Path::new("metrics.csv"), &text).unwrap();
+    rows.last().unwrap().global_step
+}
+
+/// Case 4: a run's length is counted in transitions, so a resume with another
+/// `--num-envs` stops at `--total-timesteps` instead of counting updates of the old
+/// batch size (0 new updates, or 43 % over the target).
+#[test]
+fn resume_with_another_num_envs_counts_transitions() {
+    let tmp = tempfile::tempdir().unwrap();
+    // 2 cart-poles x 32 steps: 64 transitions per update.
+    let cfg = write(
+        tmp.path(),
+        "cp.toml",
+        "name = \"cp\"\nseed = 5\ntotal_timesteps = 192\nnum_envs = 2\nthreads = 1\n\
+         checkpoint_every = 1\nplot_every = 10\nbest_window = 2\n[ppo]\nnum_steps = 32\n\
+         num_minibatches = 2\nupdate_epochs = 1\n[policy]\nkind = \"mlp\"\nmlp_hidden = 8\n\
+         [env]\nkind = \"cartpole\"\ncartpole_max_steps = 50\n",
+    );
+    let run = tmp.path().join("run");
+    let train = |extra: &[&str]| {
+        let mut a = vec!["train", "--config", s(&cfg), "--out", s(&run)];
+        a.extend(extra);
+        let o = grasp(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    train(&[]);
+    assert_eq!(last_global_step(&run), 192);
+    // 4 envs: 128 per update; 192 + 128 = 320 (before: 320 / 128 = 2 updates < 3 done,
+    // nothing trained).
+    let out = train(&["--resume", "--num-envs", "4", "--total-timesteps", "320"]);
+    assert!(out.contains("4 updates (1 new)"), "{out}");
+    assert_eq!(last_global_step(&run), 320);
+    // 1 env: 32 per update; one update reaches 352 (before: 352 / 32 = 11 updates, 7 new,
+    // 544 transitions).
+    let out = train(&["--resume", "--num-envs", "1", "--total-timesteps", "352"]);
+    assert!(out.contains("5 updates (1 new)"), "{out}");
+    assert_eq!(last_global_step(&run), 352);
+}
+
+/// Case 5: a resume that changes the training objects needs --allow-env-change, as a
+/// change of `[env]` does; nothing is rewritten when it is refused.
+#[test]
+fn resume_with_other_objects_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("model.json");
+    grasp::synergy::default_model().save(&model).unwrap();
+    let cfg = write(
+        tmp.path(),
+        "g.toml",
+        &format!(
+            "base = \"{}\"\nname = \"g\"\ntotal_timesteps = 16\nnum_envs = 2\nthreads = 2\n\
+             synergy = \"{}\"\n[ppo]\nnum_steps = 8\nnum_minibatches = 2\nupdate_epochs = 1\n\
+             [policy]\nembed_dim = 16\ngru_hidden = 16\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/configs/base.toml"),
+            s(&model)
+        ),
+    );
+    let run = tmp.path().join("run");
+    let base = ["train", "--config", s(&cfg), "--out", s(&run)];
+    let o = grasp(&[&base[..], &["--objects", "box_sugar"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let saved = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    let o = grasp(
+        &[
+            &base[..],
+            &["--resume", "--objects", "unseen", "--total-timesteps", "32"],
+        ]
+        .concat(),
+    );
+    assert_fails(
+        &o,
+        &["objects ('box_sugar', now 'unseen')", "--allow-env-change"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(run.join("config.toml")).unwrap(),
+        saved
+    );
+}
+
+/// Case 9: `--objects` with the cart-pole is refused, naming the setting (it was
+/// accepted and ignored).
+#[test]
+fn objects_for_the_cartpole_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = write(
+        tmp.path(),
+        "cp.toml",
+        "name = \"cp\"\ntotal_timesteps = 64\nnum_envs = 2\n[ppo]\nnum_steps = 32\n\
+         num_minibatches = 2\n[policy]\nkind = \"mlp\"\n[env]\nkind = \"cartpole\"\n",
+    );
+    let run = tmp.path().join("run");
+    let o = grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&run),
+        "--objects",
+        "unseen",
+    ]);
+    assert_fails(&o, &["--objects unseen", "cp.toml trains the cart-pole"]);
+    assert!(!run.exists());
+}
