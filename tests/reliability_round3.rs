@@ -427,3 +427,67 @@ fn objects_for_the_cartpole_are_refused() {
     assert_fails(&o, &["--objects unseen", "cp.toml trains the cart-pole"]);
     assert!(!run.exists());
 }
+
+/// The unclear errors of the round: each is one line naming the value and what is valid.
+#[test]
+fn unclear_errors_name_the_value_and_what_is_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    // Negative numbers reach their own checks instead of clap's generic usage error.
+    let o = grasp(&["sim", "--mass", "-1"]);
+    assert_fails(&o, &["--mass"]);
+    assert!(
+        !stderr(&o).contains("unexpected argument"),
+        "{}",
+        stderr(&o)
+    );
+    let o = eval_one(&["--difficulty", "-0.5"]);
+    assert_fails(&o, &["--difficulty must be in [0, 1], got -0.5"]);
+    // Large numbers in scientific notation, not 300 digits.
+    let o = eval_one(&["--difficulty", "1e300"]);
+    assert_fails(&o, &["--difficulty must be in [0, 1], got 1e300\n"]);
+    let cfg = write(
+        dir.path(),
+        "cp.toml",
+        "name = \"cp\"\ntotal_timesteps = 64\nnum_envs = 2\n[ppo]\nnum_steps = 32\n\
+         num_minibatches = 2\n[policy]\nkind = \"mlp\"\n[env]\nkind = \"cartpole\"\n",
+    );
+    let o = grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&dir.path().join("r")),
+        "--time-budget-minutes",
+        "-1e300",
+    ]);
+    assert_fails(
+        &o,
+        &["--time-budget-minutes -1e300 must be a positive number of minutes"],
+    );
+    // A zero closing direction is called zero.
+    let o = grasp(&["run", "--center", "0,0,0.05", "--closing", "0,0,0"]);
+    assert_fails(&o, &["closing direction is zero"]);
+    // A cloud too small to fit normals to, and a PLY version that does not exist.
+    let small = write(
+        dir.path(),
+        "small.pcd",
+        "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS 3\nDATA ascii\n\
+         0 0 0\n0.01 0 0\n0 0.01 0\n",
+    );
+    let o = grasp(&["run", "--cloud", s(&small)]);
+    assert_fails(
+        &o,
+        &["the point cloud has only 3 points: at least 15 are needed"],
+    );
+    let ply = write(
+        dir.path(),
+        "v9.ply",
+        "ply\nformat ascii 9.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+         property float z\nend_header\n0 0 0\n",
+    );
+    let o = grasp(&["run", "--cloud", s(&ply)]);
+    assert_fails(
+        &o,
+        &["v9.ply", "line 2: unsupported PLY version '9.0' (1.0)"],
+    );
+}
