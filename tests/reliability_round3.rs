@@ -428,6 +428,39 @@ fn objects_for_the_cartpole_are_refused() {
     assert!(!run.exists());
 }
 
+/// A training object folder that cannot be built is named as the objects, not as "invalid
+/// config config.toml".
+#[test]
+fn a_broken_training_object_folder_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("model.json");
+    grasp::synergy::default_model().save(&model).unwrap();
+    let objects = tmp.path().join("objs");
+    std::fs::create_dir(&objects).unwrap();
+    write(&objects, "broken.obj", "v 0 0\nf 1 2 3\n");
+    let cfg = write(
+        tmp.path(),
+        "g.toml",
+        &format!(
+            "base = \"{}\"\nname = \"g\"\ntotal_timesteps = 16\nnum_envs = 2\nthreads = 2\n\
+             synergy = \"{}\"\n[ppo]\nnum_steps = 8\nnum_minibatches = 2\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/configs/base.toml"),
+            s(&model)
+        ),
+    );
+    let o = grasp(&[
+        "train",
+        "--config",
+        s(&cfg),
+        "--out",
+        s(&tmp.path().join("run")),
+        "--objects",
+        s(&objects),
+    ]);
+    assert_fails(&o, &[&format!("`{}`", s(&objects)), "broken.obj"]);
+    assert!(!stderr(&o).contains("config.toml"), "{}", stderr(&o));
+}
+
 /// The unclear errors of the round: each is one line naming the value and what is valid.
 #[test]
 fn unclear_errors_name_the_value_and_what_is_valid() {
