@@ -88,7 +88,7 @@ fn eval_outputs_are_checked_before_the_first_episode() {
     let d = dir.path();
     let file = d.join("a");
     std::fs::write(&file, "x").unwrap();
-    let cases: [(Vec<String>, Vec<String>); 4] = [
+    let cases: [(Vec<String>, Vec<String>); 5] = [
         (
             vec!["--csv".into(), s(d).into()],
             vec![format!("--csv {}", s(d)), "is a directory".into()],
@@ -107,6 +107,11 @@ fn eval_outputs_are_checked_before_the_first_episode() {
         (
             vec!["--labels".into(), "A,A".into()],
             vec!["--labels: 'A' is given twice".into()],
+        ),
+        // A folder no file can be created in (as an unprivileged user's read-only one).
+        (
+            vec!["--csv".into(), "/proc/t.csv".into()],
+            vec!["--csv /proc/t.csv: cannot create files in /proc".into()],
         ),
     ];
     for (flags, needles) in cases {

@@ -86,7 +86,7 @@ pub fn check_writable_dir(dir: &Path) -> Result<(), WriteError> {
 }
 
 /// The nearest existing ancestor of `dir` (itself included) must be a folder in which a
-/// file can be created (tried with a temporary file, removed at once).
+/// file can be created (tried with an empty file, removed at once).
 fn probe_folder(dir: &Path) -> std::io::Result<()> {
     use std::io::{Error, ErrorKind};
     let mut p = dir.to_path_buf();
@@ -102,18 +102,33 @@ fn probe_folder(dir: &Path) -> std::io::Result<()> {
             Err(e) if matches!(e.kind(), ErrorKind::NotFound | ErrorKind::NotADirectory) => {
                 p = match p.parent() {
                     Some(q) if !q.as_os_str().is_empty() => q.to_path_buf(),
+                    // The current folder itself is gone: nothing above it to try.
+                    _ if p == Path::new(".") => return Err(e),
                     _ => PathBuf::from("."),
                 };
             }
             Err(e) => return Err(e),
         }
     }
-    tempfile::NamedTempFile::new_in(&p).map(drop).map_err(|e| {
-        Error::new(
+    // A file of a name no one else uses, created and removed at once.
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    let probe = p.join(format!(".grasp-write-check-{}-{nanos}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(Error::new(
             e.kind(),
             format!("cannot create files in {}: {e}", p.display()),
-        )
-    })
+        )),
+    }
 }
 
 /// The regular file that writing `path` should replace: `path` itself, or the end of its
