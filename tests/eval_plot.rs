@@ -164,7 +164,14 @@ fn plot_errors_are_clear_and_come_before_the_evaluation() {
     let o = eval(&png);
     assert_fails(&o, 1, &["p.png", "must end in .svg"]);
     assert!(!stderr(&o).contains("evaluating"), "{}", stderr(&o));
-    assert_fails(&eval(&format!("{d}/no/such/p.svg")), 1, &["does not exist"]);
+    // One rule for every output (issue 49): a missing folder is created, a file where a
+    // folder goes is refused.
+    std::fs::write(dir.path().join("f"), "x").unwrap();
+    assert_fails(
+        &eval(&format!("{d}/f/p.svg")),
+        1,
+        &["p.svg", "is a file, not a folder"],
+    );
     std::fs::create_dir(dir.path().join("d.svg")).unwrap();
     assert_fails(&eval(&format!("{d}/d.svg")), 1, &["d.svg", "is a folder"]);
 

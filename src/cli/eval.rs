@@ -7,15 +7,15 @@ use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
-use grasp::eval::record::{write_index, RecordOptions};
+use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
 use grasp::eval::{
     checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
-    physics_line, read_results, AgentResult, AgentSpec, PregraspStats,
+    physics_line, read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats,
 };
 use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
 use grasp::sim::{HandSim, SimConfig};
-use grasp::util::fsx::write_atomic;
+use grasp::util::fsx::{check_writable_file, write_atomic};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -79,7 +79,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub modality: Option<Modality>,
     /// Curriculum success rate r_s that sets the start-pose randomisation (eq. 6).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub difficulty: f64,
     /// Simulator config (TOML). When absent: the one the checkpoints were trained with
     /// (their config.toml's sim_config, a path from the current directory; refused when
@@ -305,6 +305,16 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
             let model = if setup.synergy.is_some() {
                 setup.synergy_model()?
             } else {
+                if !g.quiet {
+                    eprintln!(
+                        "warning: {} has no synergy.json; its policy acts in {}",
+                        dir.display(),
+                        a.synergy.as_ref().map_or_else(
+                            || "the shipped synergy model (assets/synergy/model.json)".to_string(),
+                            |p| format!("--synergy {}", p.display())
+                        )
+                    );
+                }
                 load_synergy(a.synergy.as_ref(), setup.n_components)?
             };
             Ok(AgentEnv {
@@ -320,10 +330,20 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
         .collect()
 }
 
+/// Most trials per object `eval --trials` runs (each is a simulated episode per agent).
+const MAX_TRIALS: usize = 10_000;
+
 pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
+    // Every output is checked before the first episode, so that no evaluation is thrown
+    // away by a write bound to fail.
     if let Some(p) = &a.plot {
         check_plot_path(p)?;
     }
+    if let Some(p) = &a.csv {
+        check_writable_file(p)
+            .map_err(|e| anyhow::anyhow!("--csv {}: {}", p.display(), e.source))?;
+    }
+    check_labels(&a)?;
     let (mut results, title) = match &a.from_json {
         Some(f) => (
             saved(&a, f)?,
@@ -355,6 +375,8 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
             r.agent = l.clone();
         }
     }
+    // The results are printed before any file is written: a failed write loses nothing.
+    print_results(&a, g, &results)?;
     if let Some(p) = &a.csv {
         write_atomic(p, csv_table(&results).as_bytes())?;
     }
@@ -365,7 +387,29 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
             eprintln!("wrote the per-object plot to {}", p.display());
         }
     }
-    print_results(&a, g, &results)
+    Ok(())
+}
+
+/// Refuses empty or repeated `--labels` (the outputs would say "A vs A"), and, before an
+/// evaluation, a number of labels other than the number of `--policy` agents.
+fn check_labels(a: &EvalArgs) -> Result<()> {
+    for (i, l) in a.labels.iter().enumerate() {
+        if l.trim().is_empty() {
+            bail!("--labels: label {} is empty; give each agent a name", i + 1);
+        }
+        if a.labels[..i].contains(l) {
+            bail!("--labels: '{l}' is given twice; each agent needs its own name");
+        }
+    }
+    if a.from_json.is_none() && !a.labels.is_empty() && a.labels.len() != a.policy.len() {
+        bail!(
+            "--labels names {} agents, but --policy gives {}: {}",
+            a.labels.len(),
+            a.policy.len(),
+            a.policy.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// The agents of an earlier `grasp eval --json` in `file`: those named by --policy, in
@@ -402,11 +446,18 @@ fn saved(a: &EvalArgs, file: &std::path::Path) -> Result<Vec<AgentResult>> {
 
 /// Runs the evaluation the flags describe.
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
-    if a.trials == 0 {
-        bail!("--trials must be at least 1");
+    if a.trials == 0 || a.trials > MAX_TRIALS {
+        bail!(
+            "--trials {} must be in 1..={MAX_TRIALS} (trials per object, each a simulated \
+             episode per agent)",
+            a.trials
+        );
     }
     if !(0.0..=1.0).contains(&a.difficulty) {
-        bail!("--difficulty must be in [0, 1], got {}", a.difficulty);
+        bail!(
+            "--difficulty must be in [0, 1], got {}",
+            grasp::util::num::short(a.difficulty)
+        );
     }
     a.rec.check()?;
     let specs = a
@@ -423,11 +474,37 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         dir: dir.clone(),
         every: a.rec.record_every,
         only_failures: a.rec.record_failures,
+        name: None,
     });
+    // Each agent's recordings are named after it (its --labels entry where given): two
+    // agents of one name would overwrite each other's files.
+    let rec_names: Vec<String> = agents
+        .iter()
+        .enumerate()
+        .map(|(i, ag)| a.labels.get(i).cloned().unwrap_or_else(|| ag.spec.label()))
+        .collect();
+    if let Some(r) = &record {
+        for (i, n) in rec_names.iter().enumerate() {
+            let file = agent_file_name(n);
+            if let Some(j) = (0..i).find(|&j| agent_file_name(&rec_names[j]) == file) {
+                bail!(
+                    "--record {}: agents '{}' and '{n}' would both be recorded as \
+                     '{file}_<object>_<trial>' and overwrite each other: name them apart \
+                     with --labels",
+                    r.dir.display(),
+                    rec_names[j]
+                );
+            }
+        }
+    }
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?;
     let mut results = Vec::new();
-    for ag in &agents {
+    for (i, ag) in agents.iter().enumerate() {
+        let record = record.as_ref().map(|r| RecordOptions {
+            name: Some(rec_names[i].clone()),
+            ..r.clone()
+        });
         let counts: Arc<[AtomicUsize; 2]> = Arc::new(Default::default());
         let make_env = |o: usize| {
             let env = GraspEnv::new(
@@ -513,7 +590,8 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
 /// Prints `results` as the flags ask: JSON, Markdown or text, with the lift statistics and
 /// the paired comparisons with the first agent.
 fn print_results(a: &EvalArgs, g: &Global, results: &[AgentResult]) -> Result<()> {
-    let pairs = paired_lines(&paired_with_first(results));
+    // Agents whose trials are not the same scenes are said to be so, not left out.
+    let pairs = paired_lines(&paired_with_first(results)) + &unpaired_lines(results);
     let lift_lines: String = results.iter().map(lift_line).collect();
     let physics_lines: String = results.iter().map(physics_line).collect();
     if g.json {

@@ -48,7 +48,10 @@ pub struct ExperimentArgs {
 pub fn run(a: ExperimentArgs, g: &Global) -> Result<()> {
     if let Some(m) = a.budget_minutes {
         if !(m.is_finite() && m > 0.0) {
-            bail!("--budget-minutes must be positive, got {m}");
+            bail!(
+                "--budget-minutes must be positive, got {}",
+                grasp::util::num::short(m)
+            );
         }
     }
     if a.parallel == Some(0) {

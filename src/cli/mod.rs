@@ -49,10 +49,26 @@ pub struct RecordArgs {
 }
 
 impl RecordArgs {
-    /// Rejects `--record-every 0`.
+    /// Rejects `--record-every 0`, a `--record` folder that cannot be written (a file, a
+    /// folder without write permission) and one that already holds recordings (its
+    /// index.html), before the first episode.
     pub fn check(&self) -> anyhow::Result<()> {
         if self.record_every == 0 {
             anyhow::bail!("--record-every must be at least 1");
+        }
+        if let Some(dir) = &self.record {
+            grasp::util::fsx::check_writable_dir(dir)
+                .map_err(|e| anyhow::anyhow!("--record {}: {}", dir.display(), e.source))?;
+            let index = dir.join(grasp::eval::record::INDEX_FILE);
+            if index.exists() {
+                anyhow::bail!(
+                    "--record {}: the folder already holds recordings ({}); their files of \
+                     the same names and the index would be overwritten: record into a new \
+                     folder, or remove them first",
+                    dir.display(),
+                    index.display()
+                );
+            }
         }
         Ok(())
     }

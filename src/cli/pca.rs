@@ -282,7 +282,7 @@ fn fit(a: FitArgs, g: &Global) -> Result<()> {
     if !(a.tolerance.is_finite() && a.tolerance >= 0.0) {
         anyhow::bail!(
             "--tolerance must be a finite number >= 0, got {}",
-            a.tolerance
+            grasp::util::num::short(a.tolerance)
         );
     }
     let opts = LoadOptions {

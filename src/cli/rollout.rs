@@ -41,7 +41,7 @@ pub struct RolloutArgs {
     #[arg(long)]
     pub sim_config: Option<PathBuf>,
     /// Curriculum success rate r_s that sets the start-pose randomisation (eq. 6).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub difficulty: f64,
     /// Worker threads (default: available cores).
     #[arg(long)]
@@ -96,7 +96,10 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     }
     a.rec.check()?;
     if !(0.0..=1.0).contains(&a.difficulty) {
-        bail!("--difficulty must be in [0, 1], got {}", a.difficulty);
+        bail!(
+            "--difficulty must be in [0, 1], got {}",
+            grasp::util::num::short(a.difficulty)
+        );
     }
     let robot = Robot::builtin(Side::Left);
     let model = load_synergy(a.synergy.as_ref(), a.components)?;

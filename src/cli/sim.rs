@@ -35,7 +35,7 @@ pub struct SimArgs {
     pub object: String,
     /// Object mass (kg); default 0.1 for the box, 0.15 for the cylinder, the library's mass
     /// for library objects.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub mass: Option<f64>,
     /// Object friction coefficient in [0, 1] (default 0.8, or the library's value).
     #[arg(long)]
@@ -85,11 +85,17 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         ("--noise", a.noise),
     ] {
         if !v.is_finite() || v.abs() > 1.0 {
-            bail!("{name} = {v}: must be finite and at most 1 m in size");
+            bail!(
+                "{name} = {}: must be finite and at most 1 m in size",
+                grasp::util::num::short(v)
+            );
         }
     }
     if a.noise < 0.0 {
-        bail!("--noise = {}: must be >= 0", a.noise);
+        bail!(
+            "--noise = {}: must be >= 0",
+            grasp::util::num::short(a.noise)
+        );
     }
     if a.close_steps > 1000 || a.hold_steps > 1000 {
         bail!("--close-steps/--hold-steps: at most 1000");

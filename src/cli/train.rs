@@ -1,6 +1,6 @@
 //! `grasp train`: run PPO from a config file into a run folder.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use grasp::train::{OpenOptions, StopReason, TrainConfig, TrainSession};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -37,8 +37,9 @@ pub struct TrainArgs {
     /// Continue the run in the folder from its latest checkpoint.
     #[arg(long)]
     pub resume: bool,
-    /// With --resume: continue even though the config's [env] table differs from the one
-    /// the checkpoint was trained under (otherwise refused, naming the keys).
+    /// With --resume: continue even though the config's [env] table or object set
+    /// (`objects`, --objects) differs from the one the checkpoint was trained under
+    /// (otherwise refused, naming the keys).
     #[arg(long, requires = "resume")]
     pub allow_env_change: bool,
     /// Override the config's planned number of transitions.
@@ -49,7 +50,7 @@ pub struct TrainArgs {
     pub num_envs: Option<usize>,
     /// Override the config's wall-clock budget: stop cleanly, with a checkpoint, after
     /// this many minutes.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time_budget_minutes: Option<f64>,
     /// Override the config's object set: train, unseen, a folder, a manifest, names, or
     /// `procedural` (a fresh procedural object every few episodes, see `[env.stream]`).
@@ -70,9 +71,23 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
         cfg.num_envs = n;
     }
     if let Some(m) = a.time_budget_minutes {
+        if !(m.is_finite() && m > 0.0) {
+            bail!(
+                "--time-budget-minutes {} must be a positive number of minutes (it overrides \
+                 the config's time_budget_minutes)",
+                grasp::util::num::short(m)
+            );
+        }
         cfg.time_budget_minutes = Some(m);
     }
     if let Some(o) = &a.objects {
+        if cfg.env.kind != grasp::train::EnvKind::Grasp {
+            bail!(
+                "--objects {o}: {} trains the cart-pole (`[env] kind = \"cartpole\"`), which \
+                 has no objects; --objects applies to the grasping environment",
+                a.config.display()
+            );
+        }
         cfg.objects = o.clone();
     }
     cfg.validate(&a.config)

@@ -22,6 +22,23 @@ pub struct ActionSpec {
     pub lift: bool,
 }
 
+impl std::fmt::Display for ActionSpec {
+    /// As a message says it: "8 continuous actions and the lift decision".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} continuous action{}{}",
+            self.continuous,
+            if self.continuous == 1 { "" } else { "s" },
+            if self.lift {
+                " and the lift decision"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
 /// One action: the continuous components and the lift decision.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Action {

@@ -181,38 +181,56 @@ impl EnvConfig {
         if !(self.grasp_depth.is_finite() && (0.0..=0.2).contains(&self.grasp_depth)) {
             return bad(
                 "grasp_depth",
-                format!("{} is outside [0, 0.2] m", self.grasp_depth),
+                format!(
+                    "{} is outside [0, 0.2] m",
+                    crate::util::num::short(self.grasp_depth)
+                ),
             );
         }
         if !(self.closing_time > 0.0 && self.closing_time <= 10.0) {
             return bad(
                 "closing_time",
-                format!("{} is outside (0, 10] s", self.closing_time),
+                format!(
+                    "{} is outside (0, 10] s",
+                    crate::util::num::short(self.closing_time)
+                ),
             );
         }
         // At least 1 ms: a tiny period passes `> 0` but never finishes stage 1.
         if !(self.closing_period >= 1e-3 && self.closing_period <= self.closing_time) {
             return bad(
                 "closing_period",
-                format!("{} must be in [0.001 s, closing_time]", self.closing_period),
+                format!(
+                    "{} must be in [0.001 s, closing_time]",
+                    crate::util::num::short(self.closing_period)
+                ),
             );
         }
         if !(self.action.eps_scale > 0.0 && self.action.eps_scale <= 5.0) {
             return bad(
                 "action.eps_scale",
-                format!("{} is outside (0, 5]", self.action.eps_scale),
+                format!(
+                    "{} is outside (0, 5]",
+                    crate::util::num::short(self.action.eps_scale)
+                ),
             );
         }
         if !(self.action.wrist_scale >= 0.0 && self.action.wrist_scale <= 0.5) {
             return bad(
                 "action.wrist_scale",
-                format!("{} is outside [0, 0.5] rad", self.action.wrist_scale),
+                format!(
+                    "{} is outside [0, 0.5] rad",
+                    crate::util::num::short(self.action.wrist_scale)
+                ),
             );
         }
         if !(0.0..=1.0).contains(&self.action.grip_scale) {
             return bad(
                 "action.grip_scale",
-                format!("{} is outside [0, 1]", self.action.grip_scale),
+                format!(
+                    "{} is outside [0, 1]",
+                    crate::util::num::short(self.action.grip_scale)
+                ),
             );
         }
         if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {

@@ -50,7 +50,7 @@ impl ObjectCurriculumConfig {
         if !(self.floor > 0.0 && self.floor <= 10.0) {
             return Err((
                 "object_curriculum.floor",
-                format!("{} must be in (0, 10]", self.floor),
+                format!("{} must be in (0, 10]", crate::util::num::short(self.floor)),
             ));
         }
         Ok(())

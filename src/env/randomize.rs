@@ -104,7 +104,13 @@ impl Randomization {
             } else {
                 Err((
                     field,
-                    format!("{r:?} must be an ordered pair in [{lo}, {hi}]"),
+                    format!(
+                        "[{}] must be an ordered pair in [{lo}, {hi}]",
+                        r.iter()
+                            .map(|v| crate::util::num::short(*v))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
                 ))
             }
         };
@@ -115,7 +121,10 @@ impl Randomization {
             if v.is_finite() && (lo..=hi).contains(&v) {
                 Ok(())
             } else {
-                Err((field, format!("{v} is outside [{lo}, {hi}]")))
+                Err((
+                    field,
+                    format!("{} is outside [{lo}, {hi}]", crate::util::num::short(v)),
+                ))
             }
         };
         within("randomization.max_mass_kg", self.max_mass_kg, 0.001, 20.0)?;

@@ -59,7 +59,10 @@ impl RewardConfig {
         if !(w.is_finite() && (0.0..=1000.0).contains(&w)) {
             return Err((
                 "reward.displacement_weight",
-                format!("{w} is outside [0, 1000] per metre"),
+                format!(
+                    "{} is outside [0, 1000] per metre",
+                    crate::util::num::short(w)
+                ),
             ));
         }
         Ok(())

@@ -16,7 +16,7 @@ pub mod plot;
 pub mod record;
 pub mod regression;
 
-pub use paired::{paired, paired_lines, paired_with_first, Paired};
+pub use paired::{paired, paired_lines, paired_with_first, unpaired_lines, Paired};
 
 use crate::env::api::Action;
 use crate::env::grasp::{run_episode, Agent, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError};
@@ -321,6 +321,11 @@ pub struct AgentResult {
     /// before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pregrasp: Option<PregraspStats>,
+    /// The seed of the trials' start poses (`grasp --seed`); absent in evaluations saved
+    /// before it was recorded. Agents are paired trial by trial only on the same seed and
+    /// placement.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
     /// Episodes recorded (with `record`), per object then trial.
     #[serde(skip_serializing_if = "Vec::is_empty", skip_deserializing)]
     pub recordings: Vec<RecordingEntry>,
@@ -473,6 +478,10 @@ pub fn evaluate(
         .build()
         .map_err(|e| EvalError::Agent(e.to_string()))?;
     let label = spec.label();
+    // The name in recordings: the user's label for the agent, when given.
+    let rec_label = record
+        .and_then(|r| r.name.clone())
+        .unwrap_or_else(|| label.clone());
     type Trial = (EpisodeSummary, Option<RecordingEntry>);
     let per_object: Vec<Vec<Trial>> = pool.install(|| {
         (0..names.len())
@@ -500,11 +509,11 @@ pub fn evaluate(
                         if let Some(r) = record {
                             let rec = match (baseline, agent.as_mut()) {
                                 (Some(stop), _) => record::record_baseline_episode(
-                                    &mut env, stop, &label, s, r.every,
+                                    &mut env, stop, &rec_label, s, r.every,
                                 )?,
-                                (None, Some(a)) => {
-                                    record::record_agent_episode(&mut env, a, &label, s, r.every)
-                                }
+                                (None, Some(a)) => record::record_agent_episode(
+                                    &mut env, a, &rec_label, s, r.every,
+                                ),
                                 (None, None) => unreachable!("a checkpoint agent is built above"),
                             };
                             if r.only_failures && !rec.summary.physics_failure {
@@ -592,6 +601,7 @@ pub fn evaluate(
         control_steps_per_s: steps_all as f64 / wall_s.max(1e-9),
         wall_s,
         pregrasp: None,
+        seed: Some(seed),
         objects,
         recordings,
     })
@@ -621,7 +631,13 @@ impl CheckpointSetup {
                 path: p.clone(),
                 message: e.to_string(),
             })?,
-            None => crate::synergy::default_model(),
+            None => {
+                tracing::warn!(
+                    "a checkpoint without synergy.json: its policy acts in the shipped \
+                     synergy model"
+                );
+                crate::synergy::default_model()
+            }
         };
         model
             .truncated(self.n_components)
@@ -765,6 +781,16 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         return Err(bad("holds no agents".into()));
     }
     for r in &mut results {
+        // A success rate of no trials is not 0 %: such an agent is refused, not shown.
+        if let Some(o) = r.objects.iter().find(|o| o.trials == 0) {
+            return Err(bad(format!(
+                "agent '{}', object '{}': no trials (an evaluation runs at least one)",
+                r.agent, o.object
+            )));
+        }
+        if r.objects.is_empty() {
+            return Err(bad(format!("agent '{}': no objects", r.agent)));
+        }
         for o in &mut r.objects {
             let k = o.outcomes.iter().filter(|&&s| s).count();
             if o.outcomes.len() != o.trials || k != o.successes {
@@ -984,6 +1010,7 @@ mod tests {
             lifts: LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            seed: None,
             recordings: Vec::new(),
         };
         let md = markdown_table(std::slice::from_ref(&r));
@@ -1044,6 +1071,7 @@ mod tests {
             lifts: LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            seed: None,
             recordings: Vec::new(),
         };
         assert_eq!(over_1cm_by_body(&r.objects), r.over_1cm_by_body);

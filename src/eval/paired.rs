@@ -51,10 +51,52 @@ pub fn mcnemar_exact(b: usize, c: usize) -> f64 {
     (2.0 * tail).min(1.0)
 }
 
-/// Pairs `a` with `b` trial by trial. `None` when they were not run on the same objects
-/// with the same number of trials (then their trials are not the same scenes).
+/// Where an agent's hands started: the pre-grasp planner's name, else `top-down`.
+fn placement(r: &AgentResult) -> &str {
+    r.pregrasp
+        .as_ref()
+        .map_or("top-down", |p| p.placement.as_str())
+}
+
+/// Why `a` and `b` cannot be paired trial by trial (their trials are not the same
+/// scenes), or `None` when they can.
+pub fn unpaired_reason(a: &AgentResult, b: &AgentResult) -> Option<String> {
+    if placement(a) != placement(b) {
+        return Some(format!(
+            "their hands started from different placements ({} and {})",
+            placement(a),
+            placement(b)
+        ));
+    }
+    if a.seed != b.seed {
+        let s = |r: &AgentResult| r.seed.map_or("not recorded".to_string(), |v| v.to_string());
+        return Some(format!(
+            "their start poses came from different seeds ({} and {})",
+            s(a),
+            s(b)
+        ));
+    }
+    let same_trials = a.objects.len() == b.objects.len()
+        && a.objects
+            .iter()
+            .zip(&b.objects)
+            .all(|(x, y)| x.object == y.object && x.outcomes.len() == y.outcomes.len());
+    if !same_trials {
+        let n = |r: &AgentResult| r.objects.iter().map(|o| o.outcomes.len()).sum::<usize>();
+        return Some(format!(
+            "they ran different objects or numbers of trials ({} and {} trials)",
+            n(a),
+            n(b)
+        ));
+    }
+    None
+}
+
+/// Pairs `a` with `b` trial by trial. `None` when their trials are not the same scenes:
+/// other objects or numbers of trials, another start-pose seed or another placement
+/// (see [`unpaired_reason`]).
 pub fn paired(a: &AgentResult, b: &AgentResult) -> Option<Paired> {
-    if a.objects.len() != b.objects.len() {
+    if unpaired_reason(a, b).is_some() {
         return None;
     }
     let (mut both, mut only_a, mut only_b, mut neither) = (0, 0, 0, 0);
@@ -88,6 +130,24 @@ pub fn paired_with_first(results: &[AgentResult]) -> Vec<Paired> {
         return Vec::new();
     };
     rest.iter().filter_map(|r| paired(first, r)).collect()
+}
+
+/// One line for each agent after the first that cannot be paired with it, saying why
+/// (no paired comparison is printed for it).
+pub fn unpaired_lines(results: &[AgentResult]) -> String {
+    let Some((first, rest)) = results.split_first() else {
+        return String::new();
+    };
+    rest.iter()
+        .filter_map(|r| {
+            unpaired_reason(first, r).map(|why| {
+                format!(
+                    "{} vs {}: not compared trial by trial: {why}\n",
+                    first.agent, r.agent
+                )
+            })
+        })
+        .collect()
 }
 
 /// One line per comparison, e.g. `A vs B on identical start poses: only the first won 12
@@ -167,6 +227,7 @@ mod tests {
             lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            seed: None,
             recordings: Vec::new(),
         }
     }
@@ -191,7 +252,32 @@ mod tests {
         let mut d = b.clone();
         d.objects[1].object = "other".into();
         assert!(paired(&a, &d).is_none());
-        assert!(paired_with_first(&[a]).is_empty());
+        assert!(paired_with_first(std::slice::from_ref(&a)).is_empty());
+        let lines = unpaired_lines(&[a.clone(), b.clone(), c.clone()]);
+        assert_eq!(
+            lines,
+            "A vs C: not compared trial by trial: they ran different objects or numbers of \
+             trials (5 and 4 trials)\n"
+        );
+        // Another seed or placement: not the same scenes either (issue 49).
+        let mut e = b.clone();
+        e.seed = Some(3);
+        assert!(paired(&a, &e).is_none());
+        let mut f = b.clone();
+        f.pregrasp = Some(crate::eval::PregraspStats {
+            placement: "antipodal".into(),
+            planned: 5,
+            default_placement: 0,
+        });
+        assert!(paired(&a, &f).is_none());
+        let lines = unpaired_lines(&[a.clone(), e, f]);
+        assert!(
+            lines.contains(
+                "A vs B: not compared trial by trial: their start poses came from \
+                            different seeds (not recorded and 3)"
+            ) && lines.contains("different placements (top-down and antipodal)"),
+            "{lines}"
+        );
         // Tiny p-values are printed as a bound.
         let strong = Paired {
             only_agent: 20,

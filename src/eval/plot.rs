@@ -258,8 +258,8 @@ pub fn per_object_svg(title: &str, results: &[AgentResult]) -> Result<String, St
     Ok(svg)
 }
 
-/// Checks, before an evaluation starts, that `path` can take the plot: an `.svg` name in
-/// an existing folder, not a folder itself.
+/// Checks, before an evaluation starts, that `path` can take the plot: an `.svg` name, not
+/// a folder itself, that [`crate::util::fsx::check_writable_file`] accepts.
 pub fn check_plot_path(path: &Path) -> Result<(), EvalError> {
     let bad = |message: String| EvalError::Plot {
         path: path.to_path_buf(),
@@ -277,13 +277,9 @@ pub fn check_plot_path(path: &Path) -> Result<(), EvalError> {
     if path.is_dir() {
         return Err(bad("is a folder".into()));
     }
-    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(p) = parent {
-        if !p.is_dir() {
-            return Err(bad(format!("the folder {} does not exist", p.display())));
-        }
-    }
-    Ok(())
+    // The rule of every output file: missing folders are created, an existing file in
+    // the way or a folder without write permission is refused now.
+    crate::util::fsx::check_writable_file(path).map_err(|e| bad(e.source.to_string()))
 }
 
 /// Draws [`per_object_svg`] to `path` (checked by [`check_plot_path`], written
@@ -343,6 +339,7 @@ mod tests {
             lifts: LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            seed: None,
             recordings: Vec::new(),
         }
     }
@@ -411,8 +408,12 @@ mod tests {
         assert!(check_plot_path(Path::new("p.svg")).is_ok());
         let e = check_plot_path(&dir.path().join("p.png")).unwrap_err();
         assert!(e.to_string().contains("must end in .svg"), "{e}");
-        let e = check_plot_path(&dir.path().join("no/such/p.svg")).unwrap_err();
-        assert!(e.to_string().contains("does not exist"), "{e}");
+        // One rule for every output (issue 49): a missing folder is created by the write,
+        // a file where a folder goes is refused.
+        assert!(check_plot_path(&dir.path().join("no/such/p.svg")).is_ok());
+        std::fs::write(dir.path().join("f"), "x").unwrap();
+        let e = check_plot_path(&dir.path().join("f/p.svg")).unwrap_err();
+        assert!(e.to_string().contains("is a file, not a folder"), "{e}");
         std::fs::create_dir(dir.path().join("d.svg")).unwrap();
         let e = check_plot_path(&dir.path().join("d.svg")).unwrap_err();
         assert!(e.to_string().contains("is a folder"), "{e}");

@@ -41,6 +41,9 @@ pub struct RecordOptions {
     pub every: u64,
     /// Write only the episodes that ended in a physics failure.
     pub only_failures: bool,
+    /// The agent's name in the recordings and their file names (`grasp eval --labels`);
+    /// its label when `None`.
+    pub name: Option<String>,
 }
 
 impl RecordOptions {
@@ -50,9 +53,13 @@ impl RecordOptions {
             dir: dir.into(),
             every: 4,
             only_failures: false,
+            name: None,
         }
     }
 }
+
+/// The file in a folder that says it holds recordings.
+pub const INDEX_FILE: &str = "index.html";
 
 /// A frame with the stage it belongs to.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -466,7 +473,7 @@ pub fn index_html(entries: &[RecordingEntry]) -> String {
 
 /// Writes `index.html` for `entries` into `dir` (atomically).
 pub fn write_index(dir: &Path, entries: &[RecordingEntry]) -> Result<PathBuf, RecordError> {
-    let p = dir.join("index.html");
+    let p = dir.join(INDEX_FILE);
     write_atomic(&p, index_html(entries).as_bytes())?;
     Ok(p)
 }

@@ -378,7 +378,13 @@ pub fn generate(
         if !v.is_finite() || v < pd.min || v > pd.max {
             return Err(err(
                 format!("shape.params.{k}"),
-                format!("{v} is outside {}..={} ({})", pd.min, pd.max, pd.doc),
+                format!(
+                    "{} is outside {}..={} ({})",
+                    crate::util::num::short(v),
+                    pd.min,
+                    pd.max,
+                    pd.doc
+                ),
             ));
         }
         values.insert(pd.name, v);

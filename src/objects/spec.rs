@@ -249,7 +249,10 @@ impl ObjectSpec {
         if !(self.friction.is_finite() && self.friction >= fmin && self.friction <= fmax) {
             return Err(err(
                 "friction",
-                format!("{} is outside {fmin}..={fmax}", self.friction),
+                format!(
+                    "{} is outside {fmin}..={fmax}",
+                    crate::util::num::short(self.friction)
+                ),
             ));
         }
         match (self.mass_kg, self.density_kg_m3) {
@@ -262,12 +265,15 @@ impl ObjectSpec {
             (Some(m), None)
                 if !(m.is_finite() && (MASS_RANGE_KG.0..=MASS_RANGE_KG.1).contains(&m)) =>
             {
-                return Err(err("mass_kg", format!("{m} is outside 0.001..=10 kg")))
+                return Err(err(
+                    "mass_kg",
+                    format!("{} is outside 0.001..=10 kg", crate::util::num::short(m)),
+                ))
             }
             (None, Some(d)) if !(d.is_finite() && (1.0..=20000.0).contains(&d)) => {
                 return Err(err(
                     "density_kg_m3",
-                    format!("{d} is outside 1..=20000 kg/m^3"),
+                    format!("{} is outside 1..=20000 kg/m^3", crate::util::num::short(d)),
                 ))
             }
             _ => {}
@@ -309,7 +315,10 @@ impl ObjectSpec {
             }
             ShapeSpec::Mesh { scale, path } => {
                 if !(scale.is_finite() && *scale > 0.0) {
-                    return Err(err("shape.scale", format!("{scale} must be positive")));
+                    return Err(err(
+                        "shape.scale",
+                        format!("{} must be positive", crate::util::num::short(*scale)),
+                    ));
                 }
                 if path.as_os_str().is_empty() {
                     return Err(err("shape.path", "empty path".into()));
@@ -319,7 +328,10 @@ impl ObjectSpec {
                 generator, scale, ..
             } => {
                 if !(scale.is_finite() && (0.05..=20.0).contains(scale)) {
-                    return Err(err("shape.scale", format!("{scale} is outside 0.05..=20")));
+                    return Err(err(
+                        "shape.scale",
+                        format!("{} is outside 0.05..=20", crate::util::num::short(*scale)),
+                    ));
                 }
                 if super::procedural::find_generator(generator).is_none() {
                     let known: Vec<_> = super::procedural::GENERATORS

@@ -55,6 +55,17 @@ pub enum CloudError {
     /// The cloud cannot be written.
     #[error(transparent)]
     Write(#[from] crate::util::fsx::WriteError),
+    /// The cloud has fewer points than a surface normal is fitted to.
+    #[error(
+        "the point cloud has only {points} points: at least {needed} are needed (each \
+         surface normal is fitted to a point's {needed} nearest neighbours)"
+    )]
+    TooFewPoints {
+        /// Points in the cloud.
+        points: usize,
+        /// Points needed.
+        needed: usize,
+    },
     /// A parameter of a cloud operation is out of range.
     #[error("invalid parameter {name}: {detail}")]
     BadParameter {
@@ -136,6 +147,32 @@ pub fn write_pcd(path: &Path, points: &[Point3<f64>], data: PcdData) -> Result<(
         }
     }
     crate::util::fsx::write_atomic(path, &out)?;
+    Ok(())
+}
+
+/// Refuses a header's count that the data cannot hold: `count` items of at least
+/// `min_bytes` bytes each (a text line's values with their separators, a binary record)
+/// in `data_len` bytes. Checked before anything is allocated, so a count such as
+/// `element vertex 4000000000` in a small file is an error, not an aborted allocation.
+fn check_count_fits(
+    path: &Path,
+    line: Option<usize>,
+    what: &str,
+    count: usize,
+    min_bytes: usize,
+    data_len: usize,
+) -> Result<(), CloudError> {
+    // A text file's last line may lack its newline: one byte less.
+    if count.saturating_mul(min_bytes).saturating_sub(1) > data_len {
+        return Err(fmt_err(
+            path,
+            line,
+            format!(
+                "{what} {count} cannot fit in the {data_len} bytes of data (each takes at \
+                 least {min_bytes} bytes): the count is wrong or the file is truncated"
+            ),
+        ));
+    }
     Ok(())
 }
 
@@ -437,6 +474,9 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
                 c += cnt;
             }
             let ncols = c;
+            // Each point takes a line: at least one character and its newline (a loose
+            // bound, so that a short line still gets its own error below).
+            check_count_fits(path, Some(pl), "POINTS", n, 2, data.len())?;
             let text = std::str::from_utf8(data)
                 .map_err(|_| fmt_err(path, None, "ASCII data is not UTF-8 text"))?;
             let mut raw = Vec::with_capacity(n);
@@ -536,6 +576,8 @@ enum PlyProp {
 #[derive(Debug, Clone)]
 struct PlyElement {
     name: String,
+    /// The header line that declares it.
+    line: usize,
     count: usize,
     props: Vec<PlyProp>,
 }
@@ -552,7 +594,14 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
         let toks: Vec<&str> = line.split_whitespace().collect();
         match toks.as_slice() {
             [] | ["comment", ..] | ["obj_info", ..] | ["end_header"] => {}
-            ["format", kind, _version] => {
+            ["format", kind, version] => {
+                if *version != "1.0" {
+                    return Err(fmt_err(
+                        path,
+                        Some(no),
+                        format!("unsupported PLY version '{version}' (1.0)"),
+                    ));
+                }
                 binary = Some(match *kind {
                     "ascii" => false,
                     "binary_little_endian" => true,
@@ -577,6 +626,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
                 })?;
                 elements.push(PlyElement {
                     name: name.to_string(),
+                    line: no,
                     count,
                     props: Vec::new(),
                 });
@@ -641,6 +691,34 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
         xyz[a] = k;
     }
     let data = &bytes[data_start..];
+    // The elements read (those up to the vertices) must fit in the data: each binary
+    // item takes its scalars and list counts, each text item a line.
+    let mut need = 0usize;
+    for e in &elements[..=vi] {
+        let min = if binary {
+            e.props
+                .iter()
+                .map(|p| match p {
+                    PlyProp::Scalar { ty, .. } => ty.size(),
+                    PlyProp::List { count, .. } => count.size(),
+                })
+                .sum::<usize>()
+        } else {
+            // A line of at least one character and its newline (a loose bound, so that a
+            // short line still gets its own error).
+            2
+        };
+        let what = format!("element {}", e.name);
+        check_count_fits(
+            path,
+            Some(e.line),
+            &what,
+            e.count,
+            min,
+            data.len() - need.min(data.len()),
+        )?;
+        need = need.saturating_add(e.count.saturating_mul(min));
+    }
     let raw = if binary {
         read_ply_binary(path, data, &elements, vi, xyz)?
     } else {
@@ -810,12 +888,9 @@ pub fn estimate_normals(points: &[Point3<f64>], k: usize) -> Result<Vec<Vector3<
         });
     }
     if points.len() < k {
-        return Err(CloudError::BadParameter {
-            name: "k",
-            detail: format!(
-                "{k} neighbours but the cloud has only {} points",
-                points.len()
-            ),
+        return Err(CloudError::TooFewPoints {
+            points: points.len(),
+            needed: k,
         });
     }
     let c = centroid(points);
@@ -1219,6 +1294,59 @@ element vertex 2\nproperty double x\nproperty double y\nproperty double z\nprope
                 "want '{want}', got: {e}"
             );
         }
+    }
+
+    #[test]
+    fn counts_beyond_the_file_are_refused_before_allocating() {
+        // Before the check, each of these asked for 96 GB ("memory allocation failed",
+        // SIGABRT) instead of returning an error.
+        let n = 4_000_000_000usize;
+        let xyz = "property float x\nproperty float y\nproperty float z\n";
+        let ply_ascii =
+            format!("ply\nformat ascii 1.0\nelement vertex {n}\n{xyz}end_header\n0 0 0\n");
+        let mut ply_bin =
+            format!("ply\nformat binary_little_endian 1.0\nelement vertex {n}\n{xyz}end_header\n")
+                .into_bytes();
+        ply_bin.extend_from_slice(&[0u8; 12]);
+        let pcd_ascii = format!(
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS {n}\nDATA ascii\n0 0 0\n"
+        );
+        let cases: [(&str, Vec<u8>, &str); 3] = [
+            (
+                "big.ply",
+                ply_ascii.into_bytes(),
+                "line 3: element vertex 4000000000 cannot fit in the 6 bytes",
+            ),
+            (
+                "big.ply",
+                ply_bin,
+                "line 3: element vertex 4000000000 cannot fit in the 12 bytes",
+            ),
+            (
+                "big.pcd",
+                pcd_ascii.into_bytes(),
+                "line 6: POINTS 4000000000 cannot fit in the 6 bytes",
+            ),
+        ];
+        for (name, bytes, want) in cases {
+            let e = if name.ends_with("ply") {
+                parse_ply(p(name), &bytes)
+            } else {
+                parse_pcd(p(name), &bytes)
+            }
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.contains(name) && e.contains(want),
+                "want '{want}', got: {e}"
+            );
+        }
+        // A count the data can hold still reads (the last line without its newline).
+        let ok = format!("ply\nformat ascii 1.0\nelement vertex 2\n{xyz}end_header\n0 0 0\n1 1 1");
+        assert_eq!(
+            parse_ply(p("ok.ply"), ok.as_bytes()).unwrap().points.len(),
+            2
+        );
     }
 
     #[test]

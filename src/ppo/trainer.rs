@@ -210,18 +210,51 @@ impl Trainer {
     /// The learning rate of update `update` (from 1): linearly annealed from
     /// `learning_rate` at update 1 towards 0 after `num_updates`, never negative.
     pub fn learning_rate_at(&self, update: u64) -> f64 {
+        self.annealed((update.saturating_sub(1)) as f64)
+    }
+
+    /// The learning rate after `done` updates of the current batch size (fractional when
+    /// earlier updates had another batch size), annealed as [`Trainer::learning_rate_at`].
+    fn annealed(&self, done: f64) -> f64 {
         if !self.cfg.anneal_lr {
             return self.cfg.learning_rate;
         }
-        let frac = 1.0 - (update.saturating_sub(1)) as f64 / self.cfg.num_updates() as f64;
+        let frac = 1.0 - done / self.cfg.num_updates() as f64;
         self.cfg.learning_rate * frac.max(0.0)
+    }
+
+    /// Whether another update is planned: the run's length is counted in transitions,
+    /// so a run resumed with another `num_envs` or `num_steps` still stops at
+    /// `total_timesteps` (the last whole update that does not pass it; a new run makes
+    /// at least one update).
+    pub fn wants_update(&self) -> bool {
+        let batch = self.cfg.batch_size() as u64;
+        self.update == 0 || self.global_step.saturating_add(batch) <= self.cfg.total_timesteps
+    }
+
+    /// The updates and transitions the run will have made when [`Trainer::wants_update`]
+    /// turns false, counted from now.
+    pub fn planned(&self) -> (u64, u64) {
+        let batch = (self.cfg.batch_size() as u64).max(1);
+        let mut more = self.cfg.total_timesteps.saturating_sub(self.global_step) / batch;
+        if self.update == 0 {
+            more = more.max(1);
+        }
+        (
+            self.update + more,
+            self.global_step.saturating_add(more.saturating_mul(batch)),
+        )
     }
 
     /// Collects one rollout, then optimises the policy on it.
     pub fn train_update(&mut self) -> Result<UpdateMetrics, PpoError> {
         let t0 = Instant::now();
         self.update += 1;
-        let lr = self.learning_rate_at(self.update);
+        // Annealed by the transitions done, in updates of the current batch size: the
+        // update index itself for a run that kept its batch size, and the right point of
+        // the schedule for one resumed with another.
+        let batch = self.cfg.batch_size().max(1) as f64;
+        let lr = self.annealed(self.global_step as f64 / batch);
         self.opt.lr = lr;
         let buf = self.rollout()?;
         let episodes = self.envs.drain_finished();
@@ -605,8 +638,9 @@ impl Trainer {
         }
         if st.obs_dim != self.envs.obs_dim() || st.action_spec != self.envs.action_spec() {
             return Err(mismatch(format!(
-                "it was trained with obs_dim {} and action {:?}, the environments have \
-                 obs_dim {} and action {:?}",
+                "it was trained with observations of length {} and {}, the environments \
+                 have observations of length {} and {} (another modality, history or \
+                 number of synergy components)",
                 st.obs_dim,
                 st.action_spec,
                 self.envs.obs_dim(),

@@ -66,6 +66,11 @@ fn frame_from(x: Vector3<f64>, y: Vector3<f64>) -> Result<UnitQuaternion<f64>, G
     let xn = x
         .try_normalize(1e-9)
         .ok_or(GraspMapError::Degenerate("approach direction is zero"))?;
+    if y.norm() < 1e-9 {
+        return Err(GraspMapError::Degenerate(
+            "closing direction is zero: give the direction the fingers close along",
+        ));
+    }
     let yo = y - xn * xn.dot(&y);
     let yn = yo.try_normalize(1e-6).ok_or(GraspMapError::Degenerate(
         "closing direction is parallel to the approach",

@@ -409,8 +409,27 @@ pub fn plan_grasp(
         GraspSource::Cloud(points) => {
             let cands = grasp_candidates(points, &cfg.antipodal)?;
             if cands.is_empty() {
+                // A hand-sized object spans centimetres: a cloud metres across is most
+                // likely in another unit.
+                let (lo, hi) = points.iter().fold(
+                    (
+                        Vector3::repeat(f64::INFINITY),
+                        Vector3::repeat(f64::NEG_INFINITY),
+                    ),
+                    |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+                );
+                let span = (hi - lo).max();
+                let hint = if span > 2.0 {
+                    format!(
+                        "; the cloud spans {} m: its coordinates must be in metres (a \
+                         cloud in millimetres is 1000 times too large)",
+                        crate::util::num::short((span * 1000.0).round() / 1000.0)
+                    )
+                } else {
+                    String::new()
+                };
                 return Err(RunError::NoGrasp(format!(
-                    "the antipodal sampler found no two-finger grasp on the {} points of the cloud",
+                    "the antipodal sampler found no two-finger grasp on the {} points of the cloud{hint}",
                     points.len()
                 )));
             }
@@ -517,6 +536,10 @@ impl PolicyRunner {
         let full = if syn_path.is_file() {
             SynergyModel::load(&syn_path).map_err(|e| perr(e.to_string()))?
         } else {
+            tracing::warn!(
+                "checkpoint {} has no synergy.json: its policy acts in the shipped synergy model",
+                dir.display()
+            );
             crate::synergy::default_model()
         };
         let synergy = full.truncated(n).map_err(|e| perr(e.to_string()))?;

@@ -108,7 +108,7 @@ pub struct LiftConfig {
 }
 
 /// How the joints' PD position control is simulated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DriveModel {
     /// An implicit joint spring and damper folded into the multibody's mass matrix (as
@@ -122,8 +122,20 @@ pub enum DriveModel {
     MotorRow,
 }
 
+impl<'de> Deserialize<'de> for DriveModel {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        named(
+            d,
+            &[
+                ("spring", DriveModel::Spring),
+                ("motor_row", DriveModel::MotorRow),
+            ],
+        )
+    }
+}
+
 /// How the hand multibody's Coriolis and gyroscopic terms are integrated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CoriolisModel {
     /// rapier's semi-implicit treatment: the terms' velocity derivative joins the matrix
@@ -137,8 +149,20 @@ pub enum CoriolisModel {
     Explicit,
 }
 
+impl<'de> Deserialize<'de> for CoriolisModel {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        named(
+            d,
+            &[
+                ("implicit", CoriolisModel::Implicit),
+                ("explicit", CoriolisModel::Explicit),
+            ],
+        )
+    }
+}
+
 /// Which joint limits become solver rows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LimitRows {
     /// Only the limits of joints within `limit_margin + |qdot| dt` of a bound (rapier emits
@@ -147,6 +171,40 @@ pub enum LimitRows {
     Near,
     /// Every limit in every step (rapier's behaviour).
     Always,
+}
+
+impl<'de> Deserialize<'de> for LimitRows {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        named(
+            d,
+            &[("near", LimitRows::Near), ("always", LimitRows::Always)],
+        )
+    }
+}
+
+/// Deserialises a unit enum from its snake_case name; any other value, a number
+/// included, is an error listing the valid names (`coriolis = 1`).
+fn named<'de, D, T>(d: D, names: &'static [(&'static str, T)]) -> Result<T, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Copy + 'static,
+{
+    struct Names<T: 'static>(&'static [(&'static str, T)]);
+    impl<'de, T: Copy + 'static> serde::de::Visitor<'de> for Names<T> {
+        type Value = T;
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            let list: Vec<String> = self.0.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            write!(f, "one of {}", list.join(", "))
+        }
+        fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<T, E> {
+            self.0
+                .iter()
+                .find(|(n, _)| *n == v)
+                .map(|(_, t)| *t)
+                .ok_or_else(|| E::invalid_value(serde::de::Unexpected::Str(v), &self))
+        }
+    }
+    d.deserialize_any(Names(names))
 }
 
 fn default_prediction_distance() -> f64 {
@@ -485,6 +543,16 @@ impl SimConfig {
         if !self.gravity.is_finite() || self.gravity.abs() > 100.0 {
             return Err(bad("gravity", self.gravity, "must be finite, |g| <= 100"));
         }
+        // Cross-field checks: settings each valid alone that together make every episode
+        // fail or succeed regardless of the grasp.
+        if self.gravity >= 0.0 {
+            return Err(bad(
+                "gravity",
+                self.gravity,
+                "must be negative (m/s^2 along z, which points up; Earth's is -9.81): with \
+                 none or upward gravity an object floats and every lift is judged a success",
+            ));
+        }
         for (name, g) in [
             ("fingers", self.motors.fingers),
             ("thumb", self.motors.thumb),
@@ -544,9 +612,53 @@ impl SimConfig {
             ));
         }
         nonneg("lift.success_height", self.lift.success_height)?;
+        if self.lift.success_height >= self.lift.height {
+            return Err(bad(
+                "lift.success_height",
+                self.lift.success_height,
+                &format!(
+                    "must be below lift.height {} m: the object rises at most as far as the \
+                     hand, so every lift would fail",
+                    crate::util::num::short(self.lift.height)
+                ),
+            ));
+        }
         pos("failure.max_speed", self.failure.max_speed)?;
         pos("failure.max_object_travel", self.failure.max_object_travel)?;
         pos("failure.max_penetration", self.failure.max_penetration)?;
+        for (field, f) in [
+            (
+                "contacts.natural_frequency",
+                self.contacts.natural_frequency,
+            ),
+            (
+                "contacts.static_natural_frequency",
+                self.contacts.static_natural_frequency,
+            ),
+        ] {
+            // A body resting on such a contact settles about g / (2 pi f)^2 deep.
+            let sag = self.gravity.abs() / (2.0 * std::f64::consts::PI * f).powi(2);
+            if f.is_finite() && f > 0.0 && sag >= self.failure.max_penetration {
+                let min = (self.gravity.abs() / self.failure.max_penetration).sqrt()
+                    / (2.0 * std::f64::consts::PI);
+                return Err(bad(
+                    field,
+                    f,
+                    &format!(
+                        "too soft: a body resting on such a contact sinks about {} m, beyond \
+                         failure.max_penetration {} m, so every episode would end in a \
+                         physics failure; use more than {:.1} Hz (rapier's default is 30)",
+                        if sag < 1e3 {
+                            format!("{sag:.3}")
+                        } else {
+                            format!("{sag:.2e}")
+                        },
+                        crate::util::num::short(self.failure.max_penetration),
+                        min
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -567,6 +679,42 @@ mod tests {
             c.steps_per_control(),
             (c.control_period / c.dt).round() as usize
         );
+    }
+
+    #[test]
+    fn settings_that_decide_every_episode_are_refused() {
+        // Each valid alone before issue 49; together with the defaults every lift failed,
+        // every floating object succeeded, or every episode was a physics failure.
+        type Edit = fn(&mut SimConfig);
+        let cases: [(Edit, &str); 5] = [
+            (
+                |c| c.lift.success_height = 0.5,
+                "'lift.success_height' = 0.5: must be below lift.height 0.15 m",
+            ),
+            (|c| c.gravity = 9.81, "'gravity' = 9.81: must be negative"),
+            (|c| c.gravity = 0.0, "'gravity' = 0: must be negative"),
+            (
+                |c| c.contacts.natural_frequency = 1e-6,
+                "'contacts.natural_frequency' = 1e-6: too soft: a body resting on such a \
+                 contact sinks about 2.48e11 m, beyond failure.max_penetration 0.02 m",
+            ),
+            (
+                |c| c.contacts.static_natural_frequency = 2.0,
+                "use more than 3.5 Hz",
+            ),
+        ];
+        for (edit, want) in cases {
+            let mut c = SimConfig::default();
+            edit(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains(want), "want '{want}', got: {e}");
+        }
+        // Just inside the bounds is accepted.
+        let mut c = SimConfig::default();
+        c.lift.success_height = 0.149;
+        c.contacts.natural_frequency = 4.0;
+        c.gravity = -1.0;
+        c.validate().unwrap();
     }
 
     #[test]
@@ -720,6 +868,33 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("s.toml") && e.contains("sideways"), "{e}");
+    }
+
+    #[test]
+    fn model_names_of_another_type_list_the_valid_ones() {
+        for (key, old, want) in [
+            (
+                "coriolis",
+                "coriolis = \"explicit\"",
+                "one of \"implicit\", \"explicit\"",
+            ),
+            (
+                "drive",
+                "drive = \"spring\"",
+                "one of \"spring\", \"motor_row\"",
+            ),
+            (
+                "limit_rows",
+                "limit_rows = \"near\"",
+                "one of \"near\", \"always\"",
+            ),
+        ] {
+            let text = DEFAULT_SIM_TOML.replace(old, &format!("{key} = 1"));
+            let e = SimConfig::parse(Path::new("s.toml"), &text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("s.toml") && e.contains(want), "{e}");
+        }
     }
 
     #[test]

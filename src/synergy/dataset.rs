@@ -149,8 +149,9 @@ pub enum DatasetError {
     },
     /// A joint angle lies outside its limits by more than the tolerance.
     #[error(
-        "dataset {path}, line {line}, column {column} ({joint}): angle {value} rad is outside \
-         the joint limits [{lower}, {upper}] by more than {tolerance} rad"
+        "dataset {path}, line {line}, column {column} ({joint}): angle {} rad is outside \
+         the joint limits [{lower}, {upper}] by more than {tolerance} rad",
+        crate::util::num::short(*.value)
     )]
     OutOfLimits {
         /// The dataset file.

@@ -512,9 +512,10 @@ impl SynergyModel {
                     return Err(invalid(
                         "components",
                         format!(
-                            "not orthonormal: C{} . C{} = {dot} (expected {want}, tolerance {ORTHONORMAL_TOLERANCE})",
+                            "not orthonormal: C{} . C{} = {} (expected {want}, tolerance {ORTHONORMAL_TOLERANCE})",
                             a + 1,
-                            b + 1
+                            b + 1,
+                            crate::util::num::short(dot)
                         ),
                     ));
                 }
@@ -534,6 +535,29 @@ impl SynergyModel {
                 ));
             }
             check_finite(field, v).map_err(|m| invalid(field, m))?;
+        }
+        // A mean posture is a set of joint angles (rad): a value beyond half a turn is not
+        // one, and decodes every action into a clamped, meaningless posture.
+        if let Some(j) = mean.iter().position(|m| m.abs() > std::f64::consts::PI) {
+            return Err(invalid(
+                "mean",
+                format!(
+                    "mean[{j}] ({}) = {} rad is not a joint angle: expected a value in [-pi, pi]",
+                    FINGER_JOINTS[j],
+                    crate::util::num::short(mean[j])
+                ),
+            ));
+        }
+        if let Some(k) = (0..n).find(|&k| raw.projection_min[k] > raw.projection_max[k]) {
+            return Err(invalid(
+                "projection_min",
+                format!(
+                    "projection_min[{k}] = {} is above projection_max[{k}] = {}: each \
+                     component's range must have min <= max",
+                    crate::util::num::short(raw.projection_min[k]),
+                    crate::util::num::short(raw.projection_max[k])
+                ),
+            ));
         }
         Ok(SynergyModel {
             format_version: raw.format_version,
@@ -910,6 +934,23 @@ pub(crate) mod tests {
         let t = edit(&model, |v| v["projection_max"] = serde_json::json!([1.0]));
         let e = SynergyModel::from_json(p, &t).unwrap_err();
         assert!(e.to_string().contains("projection_max"), "{e}");
+
+        // Issue 49: finite but meaningless numbers were accepted.
+        let t = edit(&model, |v| v["mean"][3] = 1e308.into());
+        let e = SynergyModel::from_json(p, &t).unwrap_err().to_string();
+        assert!(
+            e.contains("m.json") && e.contains("mean[3] (FFJ1) = 1e308 rad is not a joint angle"),
+            "{e}"
+        );
+        let t = edit(&model, |v| {
+            v["projection_min"][1] = 2.0.into();
+            v["projection_max"][1] = 1.0.into();
+        });
+        let e = SynergyModel::from_json(p, &t).unwrap_err().to_string();
+        assert!(
+            e.contains("projection_min[1] = 2 is above projection_max[1] = 1"),
+            "{e}"
+        );
 
         let t = edit(&model, |v| v["joints"][0] = "WRJ1".into());
         assert!(matches!(

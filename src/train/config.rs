@@ -445,7 +445,10 @@ impl TrainConfig {
         }
         if let Some(t) = self.time_budget_minutes {
             if !(t.is_finite() && t > 0.0) {
-                return bad("time_budget_minutes", format!("{t} must be positive"));
+                return bad(
+                    "time_budget_minutes",
+                    format!("{} must be positive", crate::util::num::short(t)),
+                );
             }
         }
         if let Some(Err(m)) = self.threads.map(crate::util::threads::check) {
@@ -467,6 +470,29 @@ impl TrainConfig {
         }
         if self.env.cartpole_max_steps == 0 {
             return bad("env.cartpole_max_steps", "must be at least 1".into());
+        }
+        // Settings that would be overwritten or ignored are refused, naming them.
+        if self.policy.critic_state != 0 {
+            return bad(
+                "policy.critic_state",
+                format!(
+                    "{} is not read: the critic's privileged inputs are switched on by \
+                     `[env] critic_state = true`; remove it from [policy]",
+                    self.policy.critic_state
+                ),
+            );
+        }
+        if self.env.kind == EnvKind::Grasp
+            && self.objects == crate::objects::stream::STREAM_SET
+            && self.env.grasp.object_curriculum.enabled
+        {
+            return bad(
+                "env.object_curriculum.enabled",
+                "true, but the object curriculum weights the objects of a fixed set and \
+                 objects = \"procedural\" builds new ones as it trains (it would be \
+                 ignored): set it to false, or train on a set"
+                    .into(),
+            );
         }
         if self.env.kind == EnvKind::Grasp {
             let max = crate::env::obs::MAX_HISTORY;
@@ -717,6 +743,30 @@ mod tests {
             e.contains("o.toml") && e.contains("object_curriculum.floor"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn settings_that_would_be_ignored_are_refused() {
+        // Issue 49: both were accepted, and the run trained without them.
+        for (text, want) in [
+            (
+                "[env]\ncritic_state = true\n[policy]\ncritic_state = 12\n",
+                "`policy.critic_state`",
+            ),
+            (
+                "objects = \"procedural\"\n[env.object_curriculum]\nenabled = true\n",
+                "`env.object_curriculum.enabled`",
+            ),
+        ] {
+            let e = TrainConfig::parse(Path::new("i.toml"), text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("i.toml") && e.contains(want), "{e}");
+        }
+        // What a run folder's config.toml holds still reads.
+        let c = TrainConfig::parse(Path::new("c.toml"), "[env]\ncritic_state = true\n").unwrap();
+        let text = c.to_toml_string().unwrap();
+        assert_eq!(TrainConfig::parse(Path::new("c.toml"), &text).unwrap(), c);
     }
 
     #[test]

@@ -186,9 +186,8 @@ pub fn grasp_envs(
     } else {
         object_set(&cfg.objects)
     }
-    .map_err(|message| TrainError::ConfigValue {
-        path: PathBuf::from(files::CONFIG),
-        field: "objects".into(),
+    .map_err(|message| TrainError::Objects {
+        objects: cfg.objects.clone(),
         message,
     })?;
     let robot = Robot::builtin(Side::Left);

@@ -57,6 +57,15 @@ pub enum TrainError {
         /// What is wrong.
         message: String,
     },
+    /// The training objects cannot be built (a folder's broken mesh, an object the
+    /// simulator refuses).
+    #[error("cannot train on objects `{objects}`: {message}")]
+    Objects {
+        /// The object set as given (`objects`, `--objects`).
+        objects: String,
+        /// What is wrong, naming the object.
+        message: String,
+    },
     /// The synergy model file does not exist.
     #[error(
         "synergy model {path} does not exist: set `synergy` in the config to a model JSON \

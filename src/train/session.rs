@@ -205,8 +205,9 @@ fn table_differences(prefix: &str, a: &toml::Table, b: &toml::Table, out: &mut V
     }
 }
 
-/// The `[env]` keys in which `new` differs from the config the checkpoint in `latest`
-/// was trained under (`config.toml` beside it); empty when that file is absent.
+/// The `[env]` keys (and the object set, `objects`) in which `new` differs from the
+/// config the checkpoint in `latest` was trained under (`config.toml` beside it); empty
+/// when that file is absent.
 fn env_differences(latest: &Path, new: &TrainConfig) -> Result<Vec<String>, TrainError> {
     let path = latest.join(files::CONFIG);
     if !path.is_file() {
@@ -225,11 +226,19 @@ fn env_differences(latest: &Path, new: &TrainConfig) -> Result<Vec<String>, Trai
         })
     };
     // Both sides resolved the same way: the old file parsed to a config and written back.
-    let old = TrainConfig::parse(&path, &text)?.to_toml_string()?;
-    let old = env_table(&old, &path)?;
-    let new = env_table(&new.to_toml_string()?, Path::new("config.toml"))?;
+    let old_cfg = TrainConfig::parse(&path, &text)?;
+    let old = env_table(&old_cfg.to_toml_string()?, &path)?;
+    let new_env = env_table(&new.to_toml_string()?, Path::new("config.toml"))?;
     let mut out = Vec::new();
-    table_differences("env", &old, &new, &mut out);
+    table_differences("env", &old, &new_env, &mut out);
+    // The objects trained on are part of the environment too (`--objects unseen` on a
+    // resume would switch training to the test set).
+    if old_cfg.objects != new.objects {
+        out.push(format!(
+            "objects ('{}', now '{}')",
+            old_cfg.objects, new.objects
+        ));
+    }
     Ok(out)
 }
 
@@ -537,13 +546,12 @@ impl TrainSession {
         on_update: &mut dyn FnMut(Progress<'_>),
     ) -> Result<TrainSummary, TrainError> {
         let start = Instant::now();
-        let planned = self.trainer.num_updates();
-        let planned_steps = planned * self.trainer.config().batch_size() as u64;
+        let (planned, planned_steps) = self.trainer.planned();
         let budget = self.cfg.time_budget_minutes.map(|m| m * 60.0);
         let first = self.trainer.update_index();
         let mut stop = StopReason::Completed;
         let mut saved_at = first;
-        while self.trainer.update_index() < planned {
+        while self.trainer.wants_update() {
             if self.stop_requested() {
                 stop = StopReason::Interrupted;
                 break;

@@ -52,6 +52,85 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     Ok(())
 }
 
+/// Checks, before any work is done, that [`write_atomic`] could write `path` later: what
+/// is there is a regular file (or a link to one, or nothing), and the nearest existing
+/// folder above it is a folder this process can create files in (missing folders are
+/// created by the write). One rule for every output file, so that a long computation is
+/// not thrown away by a write that was bound to fail.
+pub fn check_writable_file(path: &Path) -> Result<(), WriteError> {
+    let wrap = |source| WriteError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let target = match regular_target(path) {
+        Ok(t) => t,
+        // A file where a folder of the path goes: said by the folder check below.
+        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => path.to_path_buf(),
+        Err(e) => return Err(wrap(e)),
+    };
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    probe_folder(&dir).map_err(wrap)
+}
+
+/// Checks, before any work is done, that files can be written into the folder `dir`
+/// later: it is a folder (or missing, with the nearest existing folder above it one)
+/// this process can create files in.
+pub fn check_writable_dir(dir: &Path) -> Result<(), WriteError> {
+    probe_folder(dir).map_err(|source| WriteError {
+        path: dir.to_path_buf(),
+        source,
+    })
+}
+
+/// The nearest existing ancestor of `dir` (itself included) must be a folder in which a
+/// file can be created (tried with an empty file, removed at once).
+fn probe_folder(dir: &Path) -> std::io::Result<()> {
+    use std::io::{Error, ErrorKind};
+    let mut p = dir.to_path_buf();
+    loop {
+        match std::fs::metadata(&p) {
+            Ok(m) if m.is_dir() => break,
+            Ok(_) => {
+                return Err(Error::new(
+                    ErrorKind::NotADirectory,
+                    format!("{} is a file, not a folder", p.display()),
+                ))
+            }
+            Err(e) if matches!(e.kind(), ErrorKind::NotFound | ErrorKind::NotADirectory) => {
+                p = match p.parent() {
+                    Some(q) if !q.as_os_str().is_empty() => q.to_path_buf(),
+                    // The current folder itself is gone: nothing above it to try.
+                    _ if p == Path::new(".") => return Err(e),
+                    _ => PathBuf::from("."),
+                };
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    // A file of a name no one else uses, created and removed at once.
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    let probe = p.join(format!(".grasp-write-check-{}-{nanos}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(Error::new(
+            e.kind(),
+            format!("cannot create files in {}: {e}", p.display()),
+        )),
+    }
+}
+
 /// The regular file that writing `path` should replace: `path` itself, or the end of its
 /// chain of symbolic links (which may not exist yet). Anything else is an error.
 fn regular_target(path: &Path) -> std::io::Result<PathBuf> {
@@ -133,6 +212,33 @@ mod tests {
             let mode = std::fs::metadata(&p).unwrap().permissions().mode();
             assert_eq!(mode & 0o777, 0o644);
         }
+    }
+
+    #[test]
+    fn writability_is_checked_before_the_work() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("a");
+        std::fs::write(&file, b"x").unwrap();
+        // Missing folders are fine (the write creates them); an existing file is replaced.
+        check_writable_file(&dir.path().join("new/sub/out.csv")).unwrap();
+        check_writable_file(&file).unwrap();
+        check_writable_dir(&dir.path().join("rec/new")).unwrap();
+        check_writable_dir(dir.path()).unwrap();
+        // A folder where a file goes, a file where a folder goes.
+        let e = check_writable_file(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("is a directory, not a regular file"), "{e}");
+        let e = check_writable_file(&file.join("x.svg"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a is a file, not a folder"), "{e}");
+        let e = check_writable_dir(&file.join("b/c"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a is a file, not a folder"), "{e}");
+        let e = check_writable_dir(&file).unwrap_err().to_string();
+        assert!(e.contains("a is a file, not a folder"), "{e}");
+        // Nothing was left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[cfg(unix)]
