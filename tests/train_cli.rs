@@ -367,9 +367,16 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 15);
+    assert_eq!(n, 16);
     // The modality ablation's arms: the main job with another modality, nothing else.
     let quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
+    // The main job with the placement mix: [env.placement] and milestones, nothing else.
+    let mut placed = TrainConfig::load(&dir.join("quick_placement.toml")).unwrap();
+    assert!(placed.env.grasp.placement.antipodal > 0.0 && placed.milestone_every > 0);
+    placed.env.grasp.placement = quick.env.grasp.placement;
+    placed.milestone_every = quick.milestone_every;
+    placed.name = quick.name.clone();
+    assert_eq!(placed, quick);
     for (file, m) in [
         ("quick_m1.toml", grasp::env::obs::Modality::M1),
         ("quick_m2.toml", grasp::env::obs::Modality::M2),

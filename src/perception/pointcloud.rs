@@ -1113,8 +1113,8 @@ pub fn grasp_candidates(
 
 #[cfg(test)]
 mod tests {
-    use crate::perception::partial_view::{sample_box_surface, sample_cylinder_surface};
     use super::*;
+    use crate::perception::partial_view::{sample_box_surface, sample_cylinder_surface};
 
     fn p(path: &str) -> &Path {
         Path::new(path)
