@@ -657,7 +657,7 @@ impl CheckpointSetup {
     ) -> Result<(), EvalError> {
         if let Some(m) = modality.filter(|m| *m != self.env.modality) {
             return Err(EvalError::Checkpoint {
-                path: dir.join(crate::train::session::files::CONFIG),
+                path: dir.join(crate::train::files::CONFIG),
                 message: format!(
                     "the checkpoint was trained with modality {:?}, not {m:?}: drop --modality",
                     self.env.modality
@@ -666,7 +666,7 @@ impl CheckpointSetup {
         }
         if let Some(n) = components.filter(|n| *n != self.n_components) {
             return Err(EvalError::Checkpoint {
-                path: dir.join(crate::train::session::files::CONFIG),
+                path: dir.join(crate::train::files::CONFIG),
                 message: format!(
                     "the checkpoint was trained with {} synergy components, not {n}: drop \
                      --components",
@@ -682,7 +682,7 @@ impl CheckpointSetup {
 /// has no `config.toml` (a checkpoint not written by `grasp train`); an error when the
 /// file is malformed or describes another environment than the grasping MDP.
 pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError> {
-    use crate::train::{session::files, EnvKind, TrainConfig};
+    use crate::train::{files, EnvKind, TrainConfig};
     let path = dir.join(files::CONFIG);
     if !path.is_file() {
         return Ok(None);

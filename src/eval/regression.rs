@@ -204,7 +204,7 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
         .truncated(5)
         .map_err(|e| EvalError::Agent(e.to_string()))?;
     let ck = super::checkpoint_setup(&setup.policy)?.ok_or_else(|| EvalError::Checkpoint {
-        path: setup.policy.join(crate::train::session::files::CONFIG),
+        path: setup.policy.join(crate::train::files::CONFIG),
         message: "missing: the regression policy must be a `grasp train` checkpoint".into(),
     })?;
     let policy_model = ck.synergy_model()?;

@@ -57,7 +57,7 @@ impl CorePolicy {
         let loaded = no_panic("loading the checkpoint", || crate::ppo::load_policy(&dir))?
             .map_err(|e| PyValueError::new_err(format!("checkpoint {}: {e}", dir.display())))?;
         checkpoint_setup(&dir).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let config_path = dir.join(crate::train::session::files::CONFIG);
+        let config_path = dir.join(crate::train::files::CONFIG);
         let config_toml = std::fs::read_to_string(&config_path).map_err(|e| {
             PyValueError::new_err(format!("cannot read {}: {e}", config_path.display()))
         })?;

@@ -7,8 +7,8 @@
 //! a config file means the same MDP to both.
 
 use super::config::{EnvKind, TrainConfig};
+use super::files;
 use super::objects::object_set;
-use super::session::files;
 use super::TrainError;
 use crate::env::api::{Action, ActionSpec, Env, Step};
 use crate::env::cartpole::CartPole;

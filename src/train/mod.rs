@@ -10,7 +10,8 @@
 //!   the config beside them;
 //! - `learning_curve.svg`: success rate and return against transitions ([`plot`]).
 //!
-//! [`envs`] builds a config's environments (the Python module builds its own there too).
+//! [`envs`] builds a config's environments (the Python module builds its own there too);
+//! [`files`] names the files of a run folder and of a checkpoint folder.
 //!
 //! Every file is replaced atomically, so a run killed at any moment (even `kill -9`) can be
 //! continued with [`TrainSession::open`]`(.., resume = true)`: the metrics rows after the
@@ -29,6 +30,7 @@
 
 pub mod config;
 pub mod envs;
+pub mod files;
 pub mod metrics;
 pub mod objects;
 pub mod plot;

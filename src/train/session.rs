@@ -2,6 +2,7 @@
 
 use super::config::TrainConfig;
 use super::envs::{build_envs, CurriculumLevels, TrainEnvs};
+use super::files;
 use super::metrics::{self, MetricsRow};
 use super::{plot, tfevents, TrainError};
 use crate::ppo::{Trainer, UpdateMetrics, CHECKPOINT_FILE};
@@ -10,25 +11,6 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
-
-/// File names inside a run folder.
-pub mod files {
-    /// The resolved config.
-    pub const CONFIG: &str = "config.toml";
-    /// The metrics table.
-    pub const METRICS: &str = "metrics.csv";
-    /// The learning-curve plot.
-    pub const PLOT: &str = "learning_curve.svg";
-    /// The synergy model copied beside a checkpoint.
-    pub const SYNERGY: &str = "synergy.json";
-    /// Prefix of the TensorBoard event file (`events.out.tfevents.<t0>.grasp`).
-    pub const EVENTS_PREFIX: &str = "events.out.tfevents.";
-    /// Suffix of the TensorBoard event file.
-    pub const EVENTS_SUFFIX: &str = ".grasp";
-    /// The lock file: an exclusive OS lock on it is held while a process trains in the
-    /// folder.
-    pub const LOCK: &str = ".lock";
-}
 
 /// How [`TrainSession::open_with`] treats an existing run folder.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
