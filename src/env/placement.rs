@@ -89,13 +89,7 @@ impl PlacementConfig {
 
     /// Checks every range; the error names the field.
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
-        let within = |field: &'static str, v: f64, lo: f64, hi: f64, unit: &str| {
-            if v.is_finite() && (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err((field, format!("{v} is outside [{lo}, {hi}]{unit}")))
-            }
-        };
+        use crate::util::num::within;
         within("placement.antipodal", self.antipodal, 0.0, 1.0, "")?;
         within("placement.yaw", self.yaw, 0.0, std::f64::consts::PI, " rad")?;
         within("placement.offset", self.offset, 0.0, MAX_SHIFT_M, " m")?;

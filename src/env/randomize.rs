@@ -117,20 +117,23 @@ impl Randomization {
         range("randomization.mass_scale", self.mass_scale, 0.1, 10.0)?;
         range("randomization.friction", self.friction, 0.0, 1.0)?;
         range("randomization.size_scale", self.size_scale, 0.5, 2.0)?;
-        let within = |field: &'static str, v: f64, lo: f64, hi: f64| {
-            if v.is_finite() && (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err((
-                    field,
-                    format!("{} is outside [{lo}, {hi}]", crate::util::num::short(v)),
-                ))
-            }
-        };
-        within("randomization.max_mass_kg", self.max_mass_kg, 0.001, 20.0)?;
-        within("randomization.yaw", self.yaw, 0.0, std::f64::consts::PI)?;
-        within("randomization.effort_noise", self.effort_noise, 0.0, 1.0)?;
-        within("randomization.joint_noise", self.joint_noise, 0.0, 0.5)
+        use crate::util::num::within;
+        within(
+            "randomization.max_mass_kg",
+            self.max_mass_kg,
+            0.001,
+            20.0,
+            "",
+        )?;
+        within("randomization.yaw", self.yaw, 0.0, std::f64::consts::PI, "")?;
+        within(
+            "randomization.effort_noise",
+            self.effort_noise,
+            0.0,
+            1.0,
+            "",
+        )?;
+        within("randomization.joint_noise", self.joint_noise, 0.0, 0.5, "")
     }
 
     /// The object of one episode: mass, friction and size drawn from `rng` (a shape that

@@ -55,17 +55,13 @@ impl Default for RewardConfig {
 impl RewardConfig {
     /// Checks the ranges: `(field, message)` on error.
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
-        let w = self.displacement_weight;
-        if !(w.is_finite() && (0.0..=1000.0).contains(&w)) {
-            return Err((
-                "reward.displacement_weight",
-                format!(
-                    "{} is outside [0, 1000] per metre",
-                    crate::util::num::short(w)
-                ),
-            ));
-        }
-        Ok(())
+        crate::util::num::within(
+            "reward.displacement_weight",
+            self.displacement_weight,
+            0.0,
+            1000.0,
+            " per metre",
+        )
     }
 }
 

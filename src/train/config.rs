@@ -686,6 +686,12 @@ mod tests {
                 "reward.displacement_weight",
             ),
             ("[env]\nmodality = \"M4\"\n", "M3G"),
+            ("[env.placement]\nantipodal = 2.0\n", "placement.antipodal"),
+            (
+                "[env.placement]\noffset = 1e300\n",
+                "placement.offset: 1e300 is outside [0, 0.05] m",
+            ),
+            ("[env.placement]\nspread = 0.1\n", "spread"),
         ] {
             let e = TrainConfig::parse(p, text).unwrap_err().to_string();
             assert!(e.contains(field) && e.contains("x.toml"), "{text}: {e}");

@@ -12,6 +12,24 @@ pub fn short(v: f64) -> String {
     }
 }
 
+/// A config value's range check: `Ok` when `v` is finite and in `[lo, hi]`, else the
+/// field and "V is outside [LO, HI]UNIT" with `v` as [`short`] writes it (`unit` starts
+/// with its space, or is empty). The `(field, message)` form is what the environment's
+/// config sections return from `validate`.
+pub fn within(
+    field: &'static str,
+    v: f64,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+) -> Result<(), (&'static str, String)> {
+    if v.is_finite() && (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err((field, format!("{} is outside [{lo}, {hi}]{unit}", short(v))))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -25,5 +43,20 @@ mod tests {
         assert_eq!(short(0.0), "0");
         assert_eq!(short(f64::NAN), "NaN");
         assert_eq!(short(f64::INFINITY), "inf");
+    }
+
+    #[test]
+    fn within_accepts_the_closed_range_and_names_the_field() {
+        assert!(within("a", 0.0, 0.0, 1.0, "").is_ok());
+        assert!(within("a", 1.0, 0.0, 1.0, " m").is_ok());
+        assert_eq!(
+            within("a.b", 1e300, 0.0, 0.05, " m"),
+            Err(("a.b", "1e300 is outside [0, 0.05] m".to_string()))
+        );
+        assert_eq!(
+            within("a", f64::NAN, 0.0, 1.0, "").unwrap_err().1,
+            "NaN is outside [0, 1]"
+        );
+        assert!(within("a", -0.1, 0.0, 1.0, "").is_err());
     }
 }
