@@ -6,6 +6,7 @@ use grasp::env::api::Env;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
+use grasp::eval::conditions::EvalConditions;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
 use grasp::eval::{
@@ -35,7 +36,7 @@ pub struct EvalArgs {
     pub policy: Vec<String>,
     /// Read the results of an earlier `grasp eval --json` from this file instead of
     /// evaluating: print, compare and plot them again.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb"])]
     pub from_json: Option<PathBuf>,
     /// Draw the per-object success of every agent (Wilson 95 % intervals, means) to this
     /// SVG file.
@@ -97,6 +98,13 @@ pub struct EvalArgs {
     /// rest (the default placement where the sampler finds none).
     #[arg(long, value_enum, default_value_t = Placement::TopDown)]
     pub pregrasp: Placement,
+    /// Evaluate every agent in perturbed conditions: a TOML file with `[placement]`
+    /// (start-pose offsets, yaw, height and a share of antipodal pre-grasps, as a training
+    /// config's `[env.placement]`) and `[randomization]` (object mass, friction, size,
+    /// sensor noise, as `[env.randomization]`), e.g. configs/sensing/conditions.toml.
+    /// Every agent meets the same draws, trial by trial.
+    #[arg(long, value_name = "FILE")]
+    pub perturb: Option<PathBuf>,
     #[command(flatten)]
     pub rec: super::RecordArgs,
 }
@@ -468,7 +476,16 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     let robot = Robot::builtin(Side::Left);
     let objects = sim_objects(&a.objects)?;
     let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
-    let agents = agent_envs(a, specs, g)?;
+    let mut agents = agent_envs(a, specs, g)?;
+    let conditions = match &a.perturb {
+        Some(p) => Some(EvalConditions::load(p)?),
+        None => None,
+    };
+    if let Some(c) = &conditions {
+        for ag in &mut agents {
+            c.apply(&mut ag.env);
+        }
+    }
     let sim_cfg = eval_sim_config(a.sim_config.as_ref(), &agents, g)?;
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
@@ -556,6 +573,9 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             &ag.spec,
             record.as_ref(),
         )?);
+        if let Some(r) = results.last_mut() {
+            r.conditions = conditions.clone();
+        }
         if a.pregrasp == Placement::Antipodal {
             let [planned, fallback] = [0, 1].map(|k| counts[k].load(Ordering::Relaxed));
             if let Some(r) = results.last_mut() {

@@ -11,6 +11,7 @@
 //! - [`read_results`]: the results of an earlier `grasp eval --json`, to print or plot again;
 //! - [`regression`]: the CI regression check against committed reference figures.
 
+pub mod conditions;
 pub mod paired;
 pub mod plot;
 pub mod record;
@@ -326,6 +327,10 @@ pub struct AgentResult {
     /// placement.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// The perturbed conditions every agent was evaluated in (`grasp eval --perturb`);
+    /// absent for the default, unperturbed evaluation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conditions: Option<conditions::EvalConditions>,
     /// Episodes recorded (with `record`), per object then trial.
     #[serde(skip_serializing_if = "Vec::is_empty", skip_deserializing)]
     pub recordings: Vec<RecordingEntry>,
@@ -601,6 +606,7 @@ pub fn evaluate(
         control_steps_per_s: steps_all as f64 / wall_s.max(1e-9),
         wall_s,
         pregrasp: None,
+        conditions: None,
         seed: Some(seed),
         objects,
         recordings,
@@ -1010,6 +1016,7 @@ mod tests {
             lifts: LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            conditions: None,
             seed: None,
             recordings: Vec::new(),
         };
@@ -1071,6 +1078,7 @@ mod tests {
             lifts: LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            conditions: None,
             seed: None,
             recordings: Vec::new(),
         };

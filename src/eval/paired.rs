@@ -68,6 +68,20 @@ pub fn unpaired_reason(a: &AgentResult, b: &AgentResult) -> Option<String> {
             placement(b)
         ));
     }
+    if a.conditions != b.conditions {
+        let c = |r: &AgentResult| {
+            if r.conditions.is_some() {
+                "perturbed"
+            } else {
+                "unperturbed"
+            }
+        };
+        return Some(format!(
+            "they were evaluated in different conditions ({} and {}, `grasp eval --perturb`)",
+            c(a),
+            c(b)
+        ));
+    }
     if a.seed != b.seed {
         let s = |r: &AgentResult| r.seed.map_or("not recorded".to_string(), |v| v.to_string());
         return Some(format!(
@@ -227,6 +241,7 @@ mod tests {
             lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            conditions: None,
             seed: None,
             recordings: Vec::new(),
         }
@@ -278,6 +293,12 @@ mod tests {
             ) && lines.contains("different placements (top-down and antipodal)"),
             "{lines}"
         );
+        // Perturbed conditions (`grasp eval --perturb`) against none: not the same scenes.
+        let mut g = b.clone();
+        g.conditions = Some(crate::eval::conditions::EvalConditions::default());
+        assert!(paired(&a, &g).is_none());
+        assert!(unpaired_lines(&[a.clone(), g])
+            .contains("different conditions (unperturbed and perturbed"));
         // Tiny p-values are printed as a bound.
         let strong = Paired {
             only_agent: 20,

@@ -339,6 +339,7 @@ mod tests {
             lifts: LiftStats::default(),
             wall_s: 1.0,
             pregrasp: None,
+            conditions: None,
             seed: None,
             recordings: Vec::new(),
         }
