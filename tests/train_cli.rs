@@ -854,3 +854,84 @@ fn milestones_keep_a_checkpoint_every_n_updates() {
         2
     );
 }
+
+#[test]
+fn fig5_and_sensing_configs_change_one_thing_each() {
+    // configs/fig5/*.toml (issue 50): ship.toml's recipe (no grip), one change per variant.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    let ship = TrainConfig::load(&dir.join("ship.toml")).unwrap();
+    assert_eq!(ship.env.grasp.action.grip_scale, 0.0);
+    let m3 = TrainConfig::load(&dir.join("fig5/m3.toml")).unwrap();
+    assert_eq!(m3.name, "fig5_gru_m3_pca5");
+    let mut same = m3.clone();
+    same.name = ship.name.clone();
+    assert_eq!(same, ship);
+    let mut n = 0;
+    for e in std::fs::read_dir(dir.join("fig5")).unwrap() {
+        let p = e.unwrap().path();
+        let file = p.file_stem().unwrap().to_string_lossy().into_owned();
+        let mut c = TrainConfig::load(&p).unwrap_or_else(|e| panic!("{file}: {e}"));
+        match file.as_str() {
+            "m3" => {}
+            "m1" | "m2" => {
+                let m = if file == "m1" {
+                    grasp::env::obs::Modality::M1
+                } else {
+                    grasp::env::obs::Modality::M2
+                };
+                assert_eq!(c.env.grasp.modality, m);
+                c.env.grasp.modality = m3.env.grasp.modality;
+            }
+            "mlp" => {
+                assert_eq!(c.policy.kind, grasp::policy::PolicyKind::Mlp);
+                c.policy.kind = m3.policy.kind;
+            }
+            pca => {
+                let k: usize = pca.trim_start_matches("pca").parse().unwrap();
+                assert_eq!(c.n_components, k);
+                c.n_components = m3.n_components;
+            }
+        }
+        c.name = m3.name.clone();
+        assert_eq!(c, m3, "{file}");
+        n += 1;
+    }
+    assert_eq!(n, 7);
+    // The sensing study: Fig. 5's modality arms from the perturbed pre-grasp, and its
+    // evaluation conditions are the training perturbations.
+    let s3 = TrainConfig::load(&dir.join("sensing/m3.toml")).unwrap();
+    let g = &s3.env.grasp;
+    assert_eq!(g.placement.antipodal, 1.0);
+    assert!(g.randomization.enabled && g.randomization.size_scale == [1.0, 1.0]);
+    let cond = grasp::eval::conditions::EvalConditions::load(&dir.join("sensing/conditions.toml"))
+        .unwrap();
+    assert_eq!(cond.randomization, g.randomization);
+    assert_eq!(
+        (
+            cond.placement.offset,
+            cond.placement.height,
+            cond.placement.yaw
+        ),
+        (g.placement.offset, g.placement.height, g.placement.yaw)
+    );
+    let mut plain = s3.clone();
+    plain.env.grasp.placement = m3.env.grasp.placement;
+    plain.env.grasp.randomization = m3.env.grasp.randomization.clone();
+    plain.name = m3.name.clone();
+    assert_eq!(plain, m3);
+    for (file, m) in [
+        ("sensing/m1.toml", grasp::env::obs::Modality::M1),
+        ("sensing/m2.toml", grasp::env::obs::Modality::M2),
+    ] {
+        let mut c = TrainConfig::load(&dir.join(file)).unwrap();
+        assert_eq!(c.env.grasp.modality, m, "{file}");
+        c.env.grasp.modality = s3.env.grasp.modality;
+        c.name = s3.name.clone();
+        assert_eq!(c, s3, "{file}");
+    }
+    // Both grids plan: 7 variants x 3 seeds, and 3 x 3.
+    for (grid, runs) in [("grids/fig5.toml", 21), ("grids/sensing.toml", 9)] {
+        let plan = grasp::experiment::plan(&dir.join(grid), Path::new("runs/x")).unwrap();
+        assert_eq!(plan.runs.len(), runs, "{grid}");
+    }
+}
