@@ -64,6 +64,27 @@ fn tiny_grid_trains_reports_skips_and_resumes() {
     assert!(runs.contains("mlp_m3_pca5,2,done,32,"));
     let run = out_dir.join("gru_m3_pca5/seed2");
     assert!(run.join("done.json").is_file() && run.join("eval.json").is_file());
+    // The second evaluated set has its own cache; each set is pooled over the two seeds
+    // (2 trials each), the MLP paired with the reference GRU.
+    assert!(run.join("eval_ball_tennis.json").is_file());
+    let pooled = v["summary"]["pooled"].as_array().unwrap();
+    assert_eq!(pooled.len(), 2);
+    for (set, name) in pooled.iter().zip(["bottle_tall", "ball_tennis"]) {
+        assert_eq!(set["objects"], name);
+        assert_eq!(set["reference"], "gru_m3_pca5");
+        let rows = set["rows"].as_array().unwrap();
+        assert_eq!(rows[0]["trials"], 4);
+        assert!(rows[0]["vs_reference"].is_null());
+        let vs = rows[1]["vs_reference"].as_array().expect("MLP vs GRU");
+        let won = vs[0].as_u64().unwrap() + vs[1].as_u64().unwrap();
+        assert!(won <= 4);
+    }
+    let md = std::fs::read_to_string(out_dir.join("summary.md")).unwrap();
+    assert!(
+        md.contains("### policy on ball_tennis (reference gru_m3_pca5)"),
+        "{md}"
+    );
+    assert!(out_dir.join("pooled.csv").is_file());
 
     // Without --resume an existing grid is refused.
     let again = grasp(&["experiment", "--grid", grid, "--out", out]);

@@ -34,13 +34,9 @@
 //! with a min-max band.
 
 pub mod curves;
+pub mod evaluation;
 
-use crate::env::curriculum::CurriculumConfig;
-use crate::env::grasp::{EnvConfig, GraspEnv};
-use crate::eval::{checkpoint_setup, evaluate, AgentSpec};
 use crate::policy::PolicyKind;
-use crate::robot::{Robot, Side};
-use crate::sim::SimConfig;
 use crate::train::files;
 use crate::train::plot::write_band_plot;
 use crate::train::session::latest_dir;
@@ -48,6 +44,7 @@ use crate::train::{metrics, StopReason, TrainConfig, TrainError, TrainSession};
 use crate::util::config::{load_toml, ConfigError};
 use crate::util::fsx::write_atomic;
 use curves::{aggregate, final_success, mean_std, success_curve, Band};
+pub use evaluation::{evaluate_runs, EvalPlacement, EvalSettings, PooledSet, RunEval, EVAL_FILE};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -56,8 +53,6 @@ use std::time::Instant;
 
 /// Marker file of a finished run.
 pub const DONE_FILE: &str = "done.json";
-/// Cached evaluation of a run.
-pub const EVAL_FILE: &str = "eval.json";
 
 /// Per-run budget: training stops at whichever limit comes first.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -85,27 +80,6 @@ pub struct RunOverrides {
     pub objects: Option<String>,
 }
 
-/// Optional evaluation of every run's latest checkpoint.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EvalSettings {
-    /// Objects (e.g. `unseen`).
-    pub objects: String,
-    /// Trials per object (0: no evaluation).
-    pub trials: usize,
-    /// Curriculum level of the start poses (eq. 6), 1 = hardest.
-    #[serde(default = "one")]
-    pub difficulty: f64,
-    /// Sample the policy's actions (as in training) instead of taking their mode
-    /// (`grasp eval --stochastic`).
-    #[serde(default)]
-    pub stochastic: bool,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
 /// One ablation: the variants compared in one plot.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -116,6 +90,9 @@ pub struct Ablation {
     pub title: Option<String>,
     /// Training configs of the variants, relative to the grid file.
     pub configs: Vec<PathBuf>,
+    /// The variant the others are compared with, one of `configs` (default: the first).
+    #[serde(default)]
+    pub reference: Option<PathBuf>,
 }
 
 /// A grid file.
@@ -257,6 +234,8 @@ pub struct Plan {
     pub variants: Vec<Variant>,
     /// For each ablation, the indices of its variants.
     pub ablations: Vec<Vec<usize>>,
+    /// For each ablation, the index of its reference variant.
+    pub references: Vec<usize>,
     /// Every run, variant-major.
     pub runs: Vec<PlannedRun>,
 }
@@ -322,13 +301,8 @@ impl GridConfig {
                 return bad("budget.minutes", format!("{m} must be positive"));
             }
         }
-        if let Some(e) = &self.eval {
-            if !(0.0..=1.0).contains(&e.difficulty) {
-                return bad(
-                    "eval.difficulty",
-                    format!("{} is outside [0, 1]", e.difficulty),
-                );
-            }
+        if let Some(Err((field, message))) = self.eval.as_ref().map(EvalSettings::validate) {
+            return bad(field, message);
         }
         if self.ablation.is_empty() {
             return bad("ablation", "add at least one [[ablation]]".into());
@@ -344,6 +318,12 @@ impl GridConfig {
                 return bad(
                     &format!("ablation[{k}].configs"),
                     "list at least one config".into(),
+                );
+            }
+            if let Some(r) = a.reference.as_ref().filter(|r| !a.configs.contains(r)) {
+                return bad(
+                    &format!("ablation[{k}].reference"),
+                    format!("{} is not one of the ablation's configs", r.display()),
                 );
             }
             if self.ablation[..k].iter().any(|b| b.name == a.name) {
@@ -364,6 +344,7 @@ pub fn plan(path: &Path, out: &Path) -> Result<Plan, ExperimentError> {
     let root = path.parent().unwrap_or(Path::new("."));
     let mut variants: Vec<Variant> = Vec::new();
     let mut ablations = Vec::new();
+    let mut references = Vec::new();
     for a in &grid.ablation {
         let mut members = Vec::new();
         for c in &a.configs {
@@ -403,6 +384,12 @@ pub fn plan(path: &Path, out: &Path) -> Result<Plan, ExperimentError> {
                 members.push(idx);
             }
         }
+        let reference = a
+            .reference
+            .as_ref()
+            .and_then(|r| variants.iter().position(|v| v.path == root.join(r)))
+            .unwrap_or(members[0]);
+        references.push(reference);
         ablations.push(members);
     }
     let runs = variants
@@ -422,6 +409,7 @@ pub fn plan(path: &Path, out: &Path) -> Result<Plan, ExperimentError> {
         out: out.to_path_buf(),
         variants,
         ablations,
+        references,
         runs,
     })
 }
@@ -721,115 +709,6 @@ fn execute(
     ))
 }
 
-/// The cached evaluation of a run (`eval.json`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunEval {
-    /// Objects evaluated on.
-    pub objects: String,
-    /// Trials per object.
-    pub trials: usize,
-    /// Start-pose difficulty.
-    pub difficulty: f64,
-    /// Transitions of the evaluated checkpoint.
-    pub transitions: u64,
-    /// Mean success over objects.
-    pub success: f64,
-}
-
-/// Evaluates the latest checkpoint of every finished run on the grid's `[eval]` objects
-/// (cached in `eval.json` while objects, trials, difficulty and the checkpoint match).
-/// `threads` workers; `seed` seeds the trials (common to all runs).
-pub fn evaluate_runs(
-    plan: &Plan,
-    threads: usize,
-    seed: u64,
-    log: &(dyn Fn(&str) + Sync),
-) -> Result<(), ExperimentError> {
-    let Some(e) = plan.grid.eval.as_ref().filter(|e| e.trials > 0) else {
-        return Ok(());
-    };
-    let objects = crate::train::objects::object_set(&e.objects).map_err(|message| {
-        ExperimentError::Value {
-            path: plan.path.clone(),
-            field: "eval.objects".into(),
-            message,
-        }
-    })?;
-    let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
-    let robot = Robot::builtin(Side::Left);
-    for r in &plan.runs {
-        let RunState::Done(rec) = run_state(&r.dir)? else {
-            continue;
-        };
-        let cache = r.dir.join(EVAL_FILE);
-        if let Ok(text) = std::fs::read_to_string(&cache) {
-            if let Ok(c) = serde_json::from_str::<RunEval>(&text) {
-                if c.objects == e.objects
-                    && c.trials == e.trials
-                    && c.difficulty == e.difficulty
-                    && c.transitions == rec.transitions
-                {
-                    continue;
-                }
-            }
-        }
-        let ck = latest_dir(&r.dir);
-        let eval_err = |source| ExperimentError::Eval {
-            dir: r.dir.clone(),
-            source,
-        };
-        let setup = checkpoint_setup(&ck)
-            .map_err(eval_err)?
-            .ok_or_else(|| io_err(&ck.join(files::CONFIG), "missing"))?;
-        let model = setup.synergy_model().map_err(eval_err)?;
-        let sim = match &plan.variants[r.variant].config.sim_config {
-            Some(p) => SimConfig::load(p).map_err(|e| io_err(p, e))?,
-            None => SimConfig::default(),
-        };
-        let env_cfg = EnvConfig {
-            curriculum: CurriculumConfig {
-                enabled: false,
-                fixed_rate: e.difficulty,
-                ..CurriculumConfig::default()
-            },
-            ..setup.env.clone()
-        };
-        let make_env = |o: usize| {
-            GraspEnv::new(
-                &robot,
-                vec![objects[o].clone()],
-                model.clone(),
-                sim.clone(),
-                env_cfg.clone(),
-            )
-        };
-        log(&format!(
-            "evaluating {} seed {} on {} x {} trials",
-            rec.variant, r.seed, e.objects, e.trials
-        ));
-        let res = evaluate(
-            &names,
-            e.trials,
-            seed,
-            threads,
-            &make_env,
-            &AgentSpec::learned(ck.clone(), e.stochastic),
-            None,
-        )
-        .map_err(eval_err)?;
-        let out = RunEval {
-            objects: e.objects.clone(),
-            trials: e.trials,
-            difficulty: e.difficulty,
-            transitions: rec.transitions,
-            success: res.mean_rate,
-        };
-        let json = serde_json::to_string_pretty(&out).map_err(|e| io_err(&cache, e))?;
-        write_atomic(&cache, json.as_bytes()).map_err(|e| io_err(&cache, e))?;
-    }
-    Ok(())
-}
-
 /// One run in the summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunRow {
@@ -884,6 +763,9 @@ pub struct GridSummary {
     pub variants: Vec<VariantRow>,
     /// Per run.
     pub runs: Vec<RunRow>,
+    /// Per ablation and evaluated set: pooled success and paired tests against the
+    /// ablation's reference.
+    pub pooled: Vec<PooledSet>,
     /// The plots written (by [`write_reports`]).
     pub plots: Vec<PathBuf>,
 }
@@ -897,6 +779,12 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
     let mut runs = Vec::new();
     // Per variant, the smoothed success curve of each run with data.
     let mut curves: SeedCurves = vec![Vec::new(); plan.variants.len()];
+    // An unreadable conditions file matches no cached evaluation.
+    let conditions = g
+        .eval
+        .as_ref()
+        .and_then(|e| e.conditions(&plan.path).ok())
+        .flatten();
     for r in &plan.runs {
         let v = &plan.variants[r.variant];
         let state = run_state(&r.dir)?;
@@ -909,15 +797,7 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
         } else {
             Vec::new()
         };
-        let eval_success = std::fs::read_to_string(r.dir.join(EVAL_FILE))
-            .ok()
-            .and_then(|t| serde_json::from_str::<RunEval>(&t).ok())
-            .filter(|c| {
-                g.eval
-                    .as_ref()
-                    .is_some_and(|e| e.objects == c.objects && e.trials == c.trials)
-            })
-            .map(|c| c.success);
+        let eval_success = evaluation::cached_eval(plan, r, 0, &conditions).map(|c| c.success);
         if !rows.is_empty() {
             curves[r.variant].push(success_curve(&rows, g.smooth));
         }
@@ -971,6 +851,7 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
             grid: g.name.clone(),
             variants,
             runs,
+            pooled: evaluation::pooled(plan),
             plots: Vec::new(),
         },
         curves,
@@ -1005,7 +886,7 @@ pub fn markdown(plan: &Plan, s: &GridSummary) -> String {
         .eval
         .as_ref()
         .filter(|e| e.trials > 0)
-        .map(|e| format!("{} success % ({} trials/object)", e.objects, e.trials));
+        .map(|e| format!("{} success % ({} trials/object)", e.objects[0], e.trials));
     let mut out = format!(
         "# Experiment grid `{}`\n\nSeeds: {:?}. Final training success: mean of the last {} \
          updates' success rates, mean ± sample std across seeds (%).\n\n| variant | setting | \
@@ -1051,6 +932,9 @@ pub fn markdown(plan: &Plan, s: &GridSummary) -> String {
                 .collect::<Vec<_>>()
                 .join(", ")
         ));
+    }
+    if let Some(e) = &plan.grid.eval {
+        out.push_str(&evaluation::pooled_markdown(&s.pooled, e));
     }
     out
 }
@@ -1111,6 +995,35 @@ pub fn write_reports(plan: &Plan) -> Result<GridSummary, ExperimentError> {
         ));
     }
     write("runs.csv", runs)?;
+    if !s.pooled.is_empty() {
+        let mut csv = String::from(
+            "ablation,objects,reference,variant,label,runs,successes,trials,success,ci_low,\
+             ci_high,only_variant,only_reference,p_value\n",
+        );
+        for set in &s.pooled {
+            for r in &set.rows {
+                let (a, b, p) = r.vs_reference.map_or(
+                    (String::new(), String::new(), String::new()),
+                    |(a, b, p)| (a.to_string(), b.to_string(), format!("{p:.6}")),
+                );
+                csv.push_str(&format!(
+                    "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{a},{b},{p}\n",
+                    set.ablation,
+                    set.objects,
+                    set.reference,
+                    r.variant,
+                    r.label,
+                    r.runs,
+                    r.successes,
+                    r.trials,
+                    r.rate(),
+                    r.ci95.0,
+                    r.ci95.1
+                ));
+            }
+        }
+        write("pooled.csv", csv)?;
+    }
     Ok(s)
 }
 
@@ -1154,6 +1067,8 @@ mod tests {
         let labels: Vec<&str> = plan.variants.iter().map(|v| v.label.as_str()).collect();
         assert_eq!(labels, ["GRU-M3PCA5", "MLP-M3PCA5", "GRU-M3PCA3"]);
         assert_eq!(plan.ablations, vec![vec![0, 1], vec![2, 0]]);
+        // No `reference`: each ablation's first config.
+        assert_eq!(plan.references, vec![0, 2]);
         assert_eq!(plan.runs.len(), 6);
         assert_eq!(plan.runs[1].dir, Path::new("out/gru_m3_pca5/seed2"));
         let c = &plan.variants[0].config;
@@ -1178,11 +1093,23 @@ mod tests {
                 "eval.difficulty",
             ),
             ("bogus = 1", "bogus"),
+            ("[eval]\nobjects = []\ntrials = 1", "eval.objects"),
+            (
+                "[eval]\nobjects = \"unseen\"\ntrials = 1\npregrasp = \"sideways\"",
+                "`top-down` or `antipodal`",
+            ),
         ] {
             let p = write_grid(dir.path(), &grid_text(extra));
             let e = plan(&p, Path::new("out")).unwrap_err().to_string();
             assert!(e.contains(field), "{extra}: {e}");
         }
+        let p = write_grid(
+            dir.path(),
+            "name = \"g\"\nseeds = [1]\n[[ablation]]\nname = \"a\"\nconfigs = \
+             [\"gru_m3_pca5.toml\"]\nreference = \"mlp_m3_pca5.toml\"\n",
+        );
+        let e = plan(&p, Path::new("o")).unwrap_err().to_string();
+        assert!(e.contains("ablation[0].reference"), "{e}");
         let p = write_grid(dir.path(), "name = \"g\"\nseeds = [1, 1]\nablation = []\n");
         assert!(plan(&p, Path::new("o"))
             .unwrap_err()
