@@ -315,6 +315,9 @@ pub fn evaluate_runs(
     Ok(())
 }
 
+/// A variant's evaluated runs on one set: ((run seed, trials' seed), every trial's outcome).
+type SeedOutcomes = Vec<((u64, u64), Vec<bool>)>;
+
 /// One variant's pooled evaluation on one set within an ablation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PooledRow {
@@ -376,7 +379,7 @@ pub fn pooled(plan: &Plan) -> Vec<PooledSet> {
     {
         for k in 0..e.objects.len() {
             // Per member: ((run seed, trials' seed), outcomes of every trial).
-            let evals: Vec<Vec<((u64, u64), Vec<bool>)>> = members
+            let evals: Vec<SeedOutcomes> = members
                 .iter()
                 .map(|&i| {
                     plan.runs
