@@ -195,13 +195,7 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
     Ok(())
 }
 
-/// Loads `--config`, or the built-in defaults.
-fn sim_config(path: Option<&PathBuf>) -> Result<SimConfig> {
-    match path {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display())),
-        None => Ok(SimConfig::default()),
-    }
-}
+use super::sim_config;
 
 /// The configs of a run: A (`--config`) and, with `--compare`, B.
 fn ab_configs(

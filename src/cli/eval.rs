@@ -168,24 +168,6 @@ struct AgentEnv {
     trained_sim: Option<Option<PathBuf>>,
 }
 
-/// Loads a simulator config file, or the built-in one.
-fn load_sim(path: Option<&PathBuf>) -> Result<SimConfig> {
-    match path {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display())),
-        None => Ok(SimConfig::default()),
-    }
-}
-
-/// The simulator config a checkpoint was trained with, read as training reads it (the
-/// default path falls back to the built-in copy outside the repository).
-fn load_trained_sim(path: Option<&PathBuf>) -> Result<SimConfig> {
-    use grasp::train::envs::DEFAULT_SIM_CONFIG_PATH;
-    match path {
-        Some(p) if p.exists() || p != Path::new(DEFAULT_SIM_CONFIG_PATH) => load_sim(Some(p)),
-        _ => Ok(SimConfig::default()),
-    }
-}
-
 /// The simulator config every agent is evaluated in: `--sim-config` (with a warning for
 /// each checkpoint trained with another), else the one the checkpoints were trained with
 /// (refused when they differ: one physics for all agents keeps them comparable; a
@@ -204,9 +186,9 @@ fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> R
         .filter_map(|ag| Some((ag.spec.checkpoint()?, ag.trained_sim.as_ref()?.as_ref())))
         .collect();
     if let Some(p) = flag {
-        let cfg = load_sim(Some(p))?;
+        let cfg = super::sim_config(Some(p))?;
         for (dir, t) in &trained {
-            if !load_trained_sim(*t).is_ok_and(|c| c == cfg) {
+            if !SimConfig::load_or_default(t.map(|p| p.as_path())).is_ok_and(|c| c == cfg) {
                 warn(format!(
                     "checkpoint {} was trained with simulator config {}; evaluating it with \
                      --sim-config {}",
@@ -220,7 +202,7 @@ fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> R
     }
     let mut chosen: Option<(SimConfig, Option<&PathBuf>, &Path)> = None;
     for (dir, t) in &trained {
-        let cfg = match load_trained_sim(*t) {
+        let cfg = match SimConfig::load_or_default(t.map(|p| p.as_path())) {
             Ok(c) => c,
             Err(e) => {
                 warn(format!(

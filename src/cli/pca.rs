@@ -4,7 +4,6 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use grasp::robot::joints::FINGER_JOINTS;
 use grasp::robot::{Robot, Side};
-use grasp::sim::SimConfig;
 use grasp::synergy::collect::{self, CollectOptions};
 use grasp::synergy::{draw, finger_limits, Dataset, LoadOptions, SynergyModel};
 use grasp::util::fsx::write_atomic;
@@ -133,11 +132,7 @@ pub fn run(args: PcaArgs, g: &Global) -> Result<()> {
 }
 
 fn collect(a: CollectArgs, g: &Global) -> Result<()> {
-    let cfg = match &a.sim_config {
-        Some(p) => SimConfig::load(p)
-            .with_context(|| format!("cannot load the simulator config {}", p.display()))?,
-        None => SimConfig::default(),
-    };
+    let cfg = super::sim_config(a.sim_config.as_ref())?;
     let robot = Robot::builtin(a.hand);
     let opts = CollectOptions {
         samples: a.samples as usize,

@@ -8,7 +8,7 @@ use grasp::eval::record::{
     record_agent_episode, record_baseline_episode, write_index, write_recording, RecordingEntry,
 };
 use grasp::robot::{Robot, Side};
-use grasp::sim::{ObjectSpec, SimConfig};
+use grasp::sim::ObjectSpec;
 use grasp::synergy::SynergyModel;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -103,10 +103,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     }
     let robot = Robot::builtin(Side::Left);
     let model = load_synergy(a.synergy.as_ref(), a.components)?;
-    let sim_cfg = match &a.sim_config {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
-        None => SimConfig::default(),
-    };
+    let sim_cfg = super::sim_config(a.sim_config.as_ref())?;
     let objects = sim_objects(&a.objects)?;
     let env_cfg = EnvConfig {
         curriculum: CurriculumConfig {

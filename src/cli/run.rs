@@ -126,13 +126,7 @@ pub fn sim_object(name: &str) -> Result<ObjectSpec> {
     Ok(objs.remove(0).1)
 }
 
-/// Loads the simulator config (defaults when absent).
-pub fn sim_config(path: Option<&PathBuf>) -> Result<SimConfig> {
-    match path {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display())),
-        None => Ok(SimConfig::default()),
-    }
-}
+pub use super::sim_config;
 
 /// The simulated hand-arm with the raw-sensor model seeded by `seed`.
 pub fn sim_backend(object: ObjectSpec, sim_cfg: SimConfig, seed: u64) -> Result<SimHandArm> {

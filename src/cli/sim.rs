@@ -6,7 +6,7 @@ use grasp::objects::sets::{self, BuildContext};
 use grasp::robot::joints::{FINGERS, KEY_CLOSING_JOINTS};
 use grasp::robot::{Posture, Robot, Side};
 use grasp::sim::script::{close_and_lift, power_grasp, ScriptOptions};
-use grasp::sim::{HandSim, ObjectShape, ObjectSpec, Scene, SimConfig};
+use grasp::sim::{HandSim, ObjectShape, ObjectSpec, Scene};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -67,10 +67,7 @@ pub struct SimArgs {
 }
 
 pub fn run(a: SimArgs, g: &Global) -> Result<()> {
-    let cfg = match &a.config {
-        Some(p) => SimConfig::load(p).with_context(|| format!("loading {}", p.display()))?,
-        None => SimConfig::default(),
-    };
+    let cfg = super::sim_config(a.config.as_ref())?;
     let mut obj = object_spec(&a.object)?;
     if let Some(m) = a.mass {
         obj.mass = m;

@@ -251,10 +251,9 @@ pub fn evaluate_runs(
                 .map_err(eval_err)?
                 .ok_or_else(|| io_err(&ck.join(files::CONFIG), "missing"))?;
             let model = setup.synergy_model().map_err(eval_err)?;
-            let sim = match &plan.variants[r.variant].config.sim_config {
-                Some(p) => SimConfig::load(p).map_err(|e| io_err(p, e))?,
-                None => SimConfig::default(),
-            };
+            let sim_path = plan.variants[r.variant].config.sim_config.as_deref();
+            let sim = SimConfig::load_or_default(sim_path)
+                .map_err(|e| io_err(sim_path.unwrap_or(Path::new("")), e))?;
             let mut env_cfg = EnvConfig {
                 curriculum: CurriculumConfig {
                     enabled: false,

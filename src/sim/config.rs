@@ -394,7 +394,23 @@ impl Default for SimConfig {
     }
 }
 
+/// The shipped simulator config, from the repository root: it holds the built-in
+/// defaults.
+pub const DEFAULT_PATH: &str = "configs/sim.toml";
+
 impl SimConfig {
+    /// The simulator config of an optional file, by one rule for every command, training
+    /// and the checkpoints' saved configs: the file when one is named, else the built-in
+    /// defaults. The shipped file ([`DEFAULT_PATH`]) named but absent from the working
+    /// folder (a command run outside the repository) is the built-in defaults it holds;
+    /// any other file named must exist and be valid.
+    pub fn load_or_default(path: Option<&Path>) -> Result<SimConfig, SimConfigError> {
+        match path {
+            Some(p) if p.exists() || p != Path::new(DEFAULT_PATH) => SimConfig::load(p),
+            _ => Ok(SimConfig::default()),
+        }
+    }
+
     /// Loads and validates a TOML file.
     pub fn load(path: &Path) -> Result<SimConfig, SimConfigError> {
         let c: SimConfig = crate::util::config::load_toml(path)?;
@@ -666,6 +682,29 @@ impl SimConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn one_rule_for_an_optional_sim_config_file() {
+        // None: the built-in defaults; the shipped file: itself (it holds the defaults),
+        // also when absent from the working folder; any other file must exist.
+        assert_eq!(
+            SimConfig::load_or_default(None).unwrap(),
+            SimConfig::default()
+        );
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_PATH);
+        assert_eq!(
+            SimConfig::load_or_default(Some(&shipped)).unwrap(),
+            SimConfig::default()
+        );
+        let here = std::env::current_dir().unwrap();
+        if !here.join(DEFAULT_PATH).exists() {
+            assert!(SimConfig::load_or_default(Some(Path::new(DEFAULT_PATH))).is_ok());
+        }
+        let e = SimConfig::load_or_default(Some(Path::new("no/such/sim.toml")))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no/such/sim.toml"), "{e}");
+    }
 
     #[test]
     fn embedded_defaults_are_valid() {

@@ -25,9 +25,6 @@ use std::sync::Arc;
 /// binary ([`crate::synergy::DEFAULT_MODEL_JSON`]).
 pub const DEFAULT_SYNERGY_PATH: &str = "assets/synergy/model.json";
 
-/// The default simulator config file, also embedded ([`crate::sim::config::DEFAULT_SIM_TOML`]).
-pub const DEFAULT_SIM_CONFIG_PATH: &str = "configs/sim.toml";
-
 /// The environments' curriculum levels (eq. 6's `r_s`), shared between the environments,
 /// which publish theirs after every reset and step, and their reader (the training loop,
 /// the Python module). Cloning shares the levels.
@@ -152,14 +149,10 @@ pub fn load_synergy(cfg: &TrainConfig) -> Result<SynergyModel, TrainError> {
     Ok(model.truncated(cfg.n_components)?)
 }
 
-/// The simulator config of `cfg`: its `sim_config` file, or the built-in defaults. The
-/// default file ([`DEFAULT_SIM_CONFIG_PATH`]) is read from the binary when the working
-/// folder does not hold it.
+/// The simulator config of `cfg`: its `sim_config` file, or the built-in defaults (see
+/// [`SimConfig::load_or_default`]).
 pub fn sim_config(cfg: &TrainConfig) -> Result<SimConfig, TrainError> {
-    Ok(match &cfg.sim_config {
-        Some(p) if p.exists() || p != Path::new(DEFAULT_SIM_CONFIG_PATH) => SimConfig::load(p)?,
-        _ => SimConfig::default(),
-    })
+    Ok(SimConfig::load_or_default(cfg.sim_config.as_deref())?)
 }
 
 /// `n` grasping environments of `cfg` (its object set or the procedural stream, synergy
@@ -284,7 +277,7 @@ mod tests {
         ));
         cfg.synergy = PathBuf::from(DEFAULT_SYNERGY_PATH);
         assert_eq!(load_synergy(&cfg).unwrap().n_components(), 5);
-        cfg.sim_config = Some(PathBuf::from(DEFAULT_SIM_CONFIG_PATH));
+        cfg.sim_config = Some(PathBuf::from(crate::sim::config::DEFAULT_PATH));
         assert_eq!(sim_config(&cfg).unwrap(), SimConfig::default());
         cfg.sim_config = Some(PathBuf::from("no/such/sim.toml"));
         assert!(sim_config(&cfg).is_err());
