@@ -234,6 +234,19 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+/// The simulator config of a `--sim-config`-style flag, by
+/// [`grasp::sim::SimConfig::load_or_default`]'s one rule (the built-in defaults when
+/// absent); errors name the file.
+pub fn sim_config(path: Option<&std::path::PathBuf>) -> anyhow::Result<grasp::sim::SimConfig> {
+    use anyhow::Context;
+    grasp::sim::SimConfig::load_or_default(path.map(|p| p.as_path())).with_context(|| {
+        format!(
+            "loading the simulator config {}",
+            path.map_or_else(String::new, |p| p.display().to_string())
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -269,17 +282,4 @@ mod tests {
         assert_eq!(candle_core::utils::get_num_threads().to_string(), set);
         assert!(std::env::var("CANDLE_NUM_THREADS").is_ok());
     }
-}
-
-/// The simulator config of a `--sim-config`-style flag, by
-/// [`grasp::sim::SimConfig::load_or_default`]'s one rule (the built-in defaults when
-/// absent); errors name the file.
-pub fn sim_config(path: Option<&std::path::PathBuf>) -> anyhow::Result<grasp::sim::SimConfig> {
-    use anyhow::Context;
-    grasp::sim::SimConfig::load_or_default(path.map(|p| p.as_path())).with_context(|| {
-        format!(
-            "loading the simulator config {}",
-            path.map_or_else(String::new, |p| p.display().to_string())
-        )
-    })
 }
