@@ -25,6 +25,7 @@
 //! - `python` (feature `python`): the PyO3 module `grasp_rl._core`, a thin layer over
 //!   [`env`](mod@env) that the `grasp_rl` package (`python/`) exposes to gymnasium.
 
+pub mod checkpoint;
 pub mod env;
 pub mod eval;
 pub mod experiment;

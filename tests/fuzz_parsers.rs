@@ -332,7 +332,7 @@ fn checkpoints() {
     let cfg = std::fs::read(src.join("config.toml")).unwrap();
     let cfg_path = dir.path().join("config.toml");
     check_file("checkpoint config.toml", 1500, &cfg, &cfg_path, |_| {
-        grasp::eval::checkpoint_setup(dir.path())
+        grasp::checkpoint::checkpoint_setup(dir.path())
     });
 }
 

@@ -2,6 +2,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use grasp::checkpoint::checkpoint_setup;
 use grasp::env::api::Env;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
@@ -10,8 +11,8 @@ use grasp::eval::conditions::EvalConditions;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
 use grasp::eval::{
-    checkpoint_setup, csv_table, evaluate, markdown_table, paired_lines, paired_with_first,
-    physics_line, read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats,
+    csv_table, evaluate, markdown_table, paired_lines, paired_with_first, physics_line,
+    read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats,
 };
 use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};

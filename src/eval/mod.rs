@@ -20,11 +20,9 @@ pub mod regression;
 pub use paired::{paired, paired_lines, paired_with_first, unpaired_lines, Paired};
 
 use crate::env::api::Action;
-use crate::env::grasp::{run_episode, Agent, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError};
-use crate::env::obs::Modality;
+use crate::env::grasp::{run_episode, Agent, EpisodeSummary, GraspEnv, GraspEnvError};
 use crate::ppo::LoadedPolicy;
 use crate::sim::{FailureReport, PhysicsFailure};
-use crate::synergy::SynergyModel;
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rayon::prelude::*;
@@ -613,117 +611,13 @@ pub fn evaluate(
     })
 }
 
-/// What a checkpoint was trained with, read from the `config.toml` that `grasp train`
-/// saves beside every checkpoint.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CheckpointSetup {
-    /// The grasping MDP's settings (modality, history, action scales, closing, ...), with
-    /// domain randomisation turned off.
-    pub env: EnvConfig,
-    /// Synergy components the policy acts in.
-    pub n_components: usize,
-    /// The synergy model saved beside the checkpoint (`synergy.json`), when present.
-    pub synergy: Option<PathBuf>,
-    /// The simulator config file the run was trained with (`None`: the built-in one).
-    pub sim_config: Option<PathBuf>,
-}
-
-impl CheckpointSetup {
-    /// The synergy model the policy acts in: the one beside the checkpoint, else the
-    /// shipped model, with `n_components` components.
-    pub fn synergy_model(&self) -> Result<SynergyModel, EvalError> {
-        let model = match &self.synergy {
-            Some(p) => SynergyModel::load(p).map_err(|e| EvalError::Checkpoint {
-                path: p.clone(),
-                message: e.to_string(),
-            })?,
-            None => {
-                tracing::warn!(
-                    "a checkpoint without synergy.json: its policy acts in the shipped \
-                     synergy model"
-                );
-                crate::synergy::default_model()
-            }
-        };
-        model
-            .truncated(self.n_components)
-            .map_err(|e| EvalError::Checkpoint {
-                path: self.synergy.clone().unwrap_or_default(),
-                message: e.to_string(),
-            })
-    }
-
-    /// Checks the user's `--modality` / `--components` against the checkpoint: a value
-    /// that differs is an error naming both.
-    pub fn check_flags(
-        &self,
-        dir: &Path,
-        modality: Option<Modality>,
-        components: Option<usize>,
-    ) -> Result<(), EvalError> {
-        if let Some(m) = modality.filter(|m| *m != self.env.modality) {
-            return Err(EvalError::Checkpoint {
-                path: dir.join(crate::train::files::CONFIG),
-                message: format!(
-                    "the checkpoint was trained with modality {:?}, not {m:?}: drop --modality",
-                    self.env.modality
-                ),
-            });
+impl From<crate::checkpoint::CheckpointError> for EvalError {
+    fn from(e: crate::checkpoint::CheckpointError) -> Self {
+        EvalError::Checkpoint {
+            path: e.path,
+            message: e.message,
         }
-        if let Some(n) = components.filter(|n| *n != self.n_components) {
-            return Err(EvalError::Checkpoint {
-                path: dir.join(crate::train::files::CONFIG),
-                message: format!(
-                    "the checkpoint was trained with {} synergy components, not {n}: drop \
-                     --components",
-                    self.n_components
-                ),
-            });
-        }
-        Ok(())
     }
-}
-
-/// Reads the training config beside the checkpoint in `dir`. `Ok(None)` when the folder
-/// has no `config.toml` (a checkpoint not written by `grasp train`); an error when the
-/// file is malformed or describes another environment than the grasping MDP.
-pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, EvalError> {
-    use crate::train::{files, EnvKind, TrainConfig};
-    let path = dir.join(files::CONFIG);
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let text = std::fs::read_to_string(&path).map_err(|e| EvalError::Checkpoint {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    let cfg = TrainConfig::parse(&path, &text).map_err(|e| EvalError::Checkpoint {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    if cfg.env.kind != EnvKind::Grasp {
-        return Err(EvalError::Checkpoint {
-            path,
-            message: format!(
-                "the checkpoint was trained on {:?}, not the grasping environment",
-                cfg.env.kind
-            ),
-        });
-    }
-    let synergy = dir.join(files::SYNERGY);
-    let mut env = cfg.env.grasp;
-    // Every agent is judged on the same, unrandomised objects and sensors, each object
-    // in turn.
-    env.randomization.enabled = false;
-    env.object_curriculum.enabled = false;
-    // Placement is the evaluation's choice (`--pregrasp`), the same for every agent.
-    env.placement = Default::default();
-    Ok(Some(CheckpointSetup {
-        env,
-        n_components: cfg.n_components,
-        synergy: synergy.is_file().then_some(synergy),
-        sim_config: cfg.sim_config,
-    }))
 }
 
 /// Errors of an evaluation.

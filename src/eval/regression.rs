@@ -203,9 +203,11 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
     let baseline_model = crate::synergy::default_model()
         .truncated(5)
         .map_err(|e| EvalError::Agent(e.to_string()))?;
-    let ck = super::checkpoint_setup(&setup.policy)?.ok_or_else(|| EvalError::Checkpoint {
-        path: setup.policy.join(crate::train::files::CONFIG),
-        message: "missing: the regression policy must be a `grasp train` checkpoint".into(),
+    let ck = crate::checkpoint::checkpoint_setup(&setup.policy)?.ok_or_else(|| {
+        EvalError::Checkpoint {
+            path: setup.policy.join(crate::checkpoint::files::CONFIG),
+            message: "missing: the regression policy must be a `grasp train` checkpoint".into(),
+        }
     })?;
     let policy_model = ck.synergy_model()?;
     let runs: [(AgentSpec, String, EnvConfig, &SynergyModel); 2] = [

@@ -18,16 +18,16 @@
 //! others) while the settings and the checkpoint match.
 
 use super::{io_err, run_state, ExperimentError, Plan, PlannedRun, RunState};
+use crate::checkpoint::checkpoint_setup;
+use crate::checkpoint::{files, latest_dir};
 use crate::env::curriculum::CurriculumConfig;
 use crate::env::grasp::{EnvConfig, GraspEnv};
 use crate::eval::conditions::EvalConditions;
 use crate::eval::paired::mcnemar_exact;
-use crate::eval::{checkpoint_setup, evaluate, wilson, AgentSpec};
+use crate::eval::{evaluate, wilson, AgentSpec};
 use crate::perception::pregrasp::AntipodalPregrasp;
 use crate::robot::{Robot, Side};
 use crate::sim::SimConfig;
-use crate::train::files;
-use crate::train::session::latest_dir;
 use crate::util::fsx::write_atomic;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::path::{Path, PathBuf};
@@ -243,14 +243,14 @@ pub fn evaluate_runs(
                 continue;
             }
             let ck = latest_dir(&r.dir);
-            let eval_err = |source| ExperimentError::Eval {
+            let eval_err = |source: crate::eval::EvalError| ExperimentError::Eval {
                 dir: r.dir.clone(),
                 source,
             };
             let setup = checkpoint_setup(&ck)
-                .map_err(eval_err)?
+                .map_err(|e| eval_err(e.into()))?
                 .ok_or_else(|| io_err(&ck.join(files::CONFIG), "missing"))?;
-            let model = setup.synergy_model().map_err(eval_err)?;
+            let model = setup.synergy_model().map_err(|e| eval_err(e.into()))?;
             let sim_path = plan.variants[r.variant].config.sim_config.as_deref();
             let sim = SimConfig::load_or_default(sim_path)
                 .map_err(|e| io_err(sim_path.unwrap_or(Path::new("")), e))?;

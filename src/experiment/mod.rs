@@ -36,10 +36,10 @@
 pub mod curves;
 pub mod evaluation;
 
+use crate::checkpoint::files;
+use crate::checkpoint::latest_dir;
 use crate::policy::PolicyKind;
-use crate::train::files;
 use crate::train::plot::write_band_plot;
-use crate::train::session::latest_dir;
 use crate::train::{metrics, StopReason, TrainConfig, TrainError, TrainSession};
 use crate::util::config::{load_toml, ConfigError};
 use crate::util::fsx::write_atomic;
@@ -352,13 +352,13 @@ pub fn plan(path: &Path, out: &Path) -> Result<Plan, ExperimentError> {
             let idx = match variants.iter().position(|v| v.path == cpath) {
                 Some(i) => i,
                 None => {
-                    let train_err = |source| ExperimentError::Train {
+                    let train_err = |source: TrainError| ExperimentError::Train {
                         context: format!("config {} (grid {})", cpath.display(), path.display()),
                         source,
                     };
-                    let mut cfg = TrainConfig::load(&cpath).map_err(train_err)?;
+                    let mut cfg = TrainConfig::load(&cpath).map_err(|e| train_err(e.into()))?;
                     apply(&grid, &mut cfg);
-                    cfg.validate(&cpath).map_err(train_err)?;
+                    cfg.validate(&cpath).map_err(|e| train_err(e.into()))?;
                     if let Some(other) = variants.iter().find(|v| v.name == cfg.name) {
                         return Err(ExperimentError::Value {
                             path: path.to_path_buf(),

@@ -8,7 +8,8 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::PyErr;
 
 /// A config or setup error (`ValueError`).
-pub fn config_error(e: TrainError) -> PyErr {
+pub fn config_error(e: impl Into<TrainError>) -> PyErr {
+    let e: TrainError = e.into();
     match e {
         TrainError::Ppo(_) | TrainError::Write(_) | TrainError::Plot { .. } => {
             PyRuntimeError::new_err(e.to_string())

@@ -4,8 +4,9 @@
 
 use super::actions::f32_bytes;
 use super::error::{locked, no_panic};
+use crate::checkpoint::checkpoint_setup;
 use crate::env::grasp::Agent;
-use crate::eval::{checkpoint_setup, PolicyAgent};
+use crate::eval::PolicyAgent;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -57,7 +58,7 @@ impl CorePolicy {
         let loaded = no_panic("loading the checkpoint", || crate::ppo::load_policy(&dir))?
             .map_err(|e| PyValueError::new_err(format!("checkpoint {}: {e}", dir.display())))?;
         checkpoint_setup(&dir).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let config_path = dir.join(crate::train::files::CONFIG);
+        let config_path = dir.join(crate::checkpoint::files::CONFIG);
         let config_toml = std::fs::read_to_string(&config_path).map_err(|e| {
             PyValueError::new_err(format!("cannot read {}: {e}", config_path.display()))
         })?;

@@ -513,10 +513,8 @@ impl PolicyRunner {
                 spec.continuous, spec.lift
             )));
         }
-        let cfg_path = dir.join("config.toml");
-        let (env, n) = if cfg_path.is_file() {
-            let c = crate::train::config::TrainConfig::load(&cfg_path)
-                .map_err(|e| perr(e.to_string()))?;
+        let saved = crate::checkpoint::saved_config(dir).map_err(|e| perr(e.message))?;
+        let (env, n) = if let Some(c) = saved {
             // n synergies, the wrist's two increments and, with the grip, one more.
             let n = c.n_components;
             let expected = c.env.grasp.action.continuous(n);
@@ -532,7 +530,7 @@ impl PolicyRunner {
             (EnvConfig::default(), spec.continuous - 2)
         };
         env.validate().map_err(|e| perr(e.to_string()))?;
-        let syn_path = dir.join("synergy.json");
+        let syn_path = dir.join(crate::checkpoint::files::SYNERGY);
         let full = if syn_path.is_file() {
             SynergyModel::load(&syn_path).map_err(|e| perr(e.to_string()))?
         } else {

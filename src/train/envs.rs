@@ -6,10 +6,10 @@
 //! The Python module (`grasp_rl`, feature `python`) builds its environments here too, so
 //! a config file means the same MDP to both.
 
-use super::config::{EnvKind, TrainConfig};
-use super::files;
 use super::objects::object_set;
 use super::TrainError;
+use crate::checkpoint::files;
+use crate::checkpoint::{EnvKind, TrainConfig};
 use crate::env::api::{Action, ActionSpec, Env, Step};
 use crate::env::cartpole::CartPole;
 use crate::env::grasp::GraspEnv;

@@ -28,16 +28,14 @@
 //! # Ok::<(), grasp::train::TrainError>(())
 //! ```
 
-pub mod config;
 pub mod envs;
-pub mod files;
 pub mod metrics;
 pub mod objects;
 pub mod plot;
 pub mod session;
 pub mod tfevents;
 
-pub use config::{EnvKind, TrainConfig, TrainEnvConfig};
+pub use crate::checkpoint::{EnvKind, TrainConfig, TrainConfigError, TrainEnvConfig};
 pub use metrics::MetricsRow;
 pub use session::{OpenOptions, Progress, StopReason, TrainSession, TrainSummary};
 
@@ -49,6 +47,9 @@ pub enum TrainError {
     /// A config file could not be read or does not match the schema.
     #[error(transparent)]
     ConfigFile(#[from] crate::util::config::ConfigError),
+    /// A training config that cannot be used.
+    #[error(transparent)]
+    Config(#[from] TrainConfigError),
     /// A config value is out of range or inconsistent.
     #[error("invalid config {path}: `{field}`: {message}")]
     ConfigValue {

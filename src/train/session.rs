@@ -1,10 +1,10 @@
 //! A training run in its run folder: environments, trainer, metrics, checkpoints, plots.
 
-use super::config::TrainConfig;
 use super::envs::{build_envs, CurriculumLevels, TrainEnvs};
-use super::files;
 use super::metrics::{self, MetricsRow};
 use super::{plot, tfevents, TrainError};
+use crate::checkpoint::files;
+use crate::checkpoint::TrainConfig;
 use crate::ppo::{Trainer, UpdateMetrics, CHECKPOINT_FILE};
 use crate::util::fsx::write_atomic;
 use std::path::{Path, PathBuf};
@@ -22,21 +22,7 @@ pub struct OpenOptions {
     pub allow_env_change: bool,
 }
 
-/// The milestone checkpoint folder of run folder `dir` after `transitions`
-/// (`milestone_every`).
-pub fn milestone_dir(dir: &Path, transitions: u64) -> PathBuf {
-    dir.join("checkpoints").join(format!("step_{transitions}"))
-}
-
-/// The latest checkpoint folder of run folder `dir`.
-pub fn latest_dir(dir: &Path) -> PathBuf {
-    dir.join("checkpoints").join("latest")
-}
-
-/// The best checkpoint folder of run folder `dir`.
-pub fn best_dir(dir: &Path) -> PathBuf {
-    dir.join("checkpoints").join("best")
-}
+use crate::checkpoint::{best_dir, latest_dir, milestone_dir};
 
 /// What the caller sees after each update.
 #[derive(Debug, Clone, Copy)]

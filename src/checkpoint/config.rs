@@ -27,7 +27,6 @@
 //! [`EnvConfig`]). Relative paths in `synergy` and `sim_config` are taken from the current
 //! directory, like paths given on the command line.
 
-use super::TrainError;
 use crate::env::action::ActionConfig;
 use crate::env::closing::ClosingSpace;
 use crate::env::curriculum::CurriculumConfig;
@@ -43,6 +42,24 @@ use crate::ppo::PpoConfig;
 use crate::util::config::{parse_toml, ConfigError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// A training config that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainConfigError {
+    /// A config file could not be read or does not match the schema.
+    #[error(transparent)]
+    File(#[from] ConfigError),
+    /// A config value is out of range or inconsistent.
+    #[error("invalid config {path}: `{field}`: {message}")]
+    Value {
+        /// The config file (or the run's resolved config).
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
 
 /// Keys of [`PpoConfig`] that are set at the top level (or in `[policy]`) instead.
 pub const PPO_KEYS_ELSEWHERE: [&str; 5] = [
@@ -206,7 +223,7 @@ fn key_line(src: &str, section: &str, key: &str) -> usize {
 
 /// Parses one file's text: syntax and schema are checked with positions, then the raw
 /// table is returned with the `base` it names.
-fn parse_file(path: &Path, src: &str) -> Result<(toml::Table, Option<String>), TrainError> {
+fn parse_file(path: &Path, src: &str) -> Result<(toml::Table, Option<String>), TrainConfigError> {
     let schema: FileSchema = parse_toml(path, src)?;
     let table: toml::Table = parse_toml(path, src)?;
     if let Some(toml::Value::Table(ppo)) = table.get("ppo") {
@@ -238,14 +255,14 @@ fn load_chain(
     path: &Path,
     depth: usize,
     seen: &mut Vec<PathBuf>,
-) -> Result<toml::Table, TrainError> {
+) -> Result<toml::Table, TrainConfigError> {
     let src = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
         path: path.to_path_buf(),
         source,
     })?;
     let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     if seen.contains(&canon) {
-        return Err(TrainError::ConfigValue {
+        return Err(TrainConfigError::Value {
             path: path.to_path_buf(),
             field: "base".into(),
             message: "the chain of base files loops back to this file".into(),
@@ -258,7 +275,7 @@ fn load_chain(
         return Ok(table);
     };
     if depth >= MAX_BASE_DEPTH {
-        return Err(TrainError::ConfigValue {
+        return Err(TrainConfigError::Value {
             path: path.to_path_buf(),
             field: "base".into(),
             message: format!("more than {MAX_BASE_DEPTH} nested base files"),
@@ -268,7 +285,7 @@ fn load_chain(
     let base_path = dir.join(base);
     if let Err(e) = std::fs::metadata(&base_path) {
         // Name the file that refers to the missing one, not only the missing one.
-        return Err(TrainError::ConfigValue {
+        return Err(TrainConfigError::Value {
             path: path.to_path_buf(),
             field: "base".into(),
             message: format!("cannot read {}: {e}", base_path.display()),
@@ -282,7 +299,7 @@ fn load_chain(
 impl TrainConfig {
     /// Loads the config file at `path` with its `base` chain, merges, fills defaults and
     /// validates. Errors name the file, and the line and key where the schema is broken.
-    pub fn load(path: &Path) -> Result<TrainConfig, TrainError> {
+    pub fn load(path: &Path) -> Result<TrainConfig, TrainConfigError> {
         let merged = load_chain(path, 0, &mut Vec::new())?;
         let stem = path
             .file_stem()
@@ -293,10 +310,10 @@ impl TrainConfig {
 
     /// Parses config text without inheritance (`base` is an error here); `path` names it
     /// in errors and its stem is the default name.
-    pub fn parse(path: &Path, src: &str) -> Result<TrainConfig, TrainError> {
+    pub fn parse(path: &Path, src: &str) -> Result<TrainConfig, TrainConfigError> {
         let (table, base) = parse_file(path, src)?;
         if base.is_some() {
-            return Err(TrainError::ConfigValue {
+            return Err(TrainConfigError::Value {
                 path: path.to_path_buf(),
                 field: "base".into(),
                 message: "inheritance needs a file: use TrainConfig::load".into(),
@@ -309,8 +326,12 @@ impl TrainConfig {
         Self::from_table(path, table, &stem)
     }
 
-    fn from_table(path: &Path, table: toml::Table, stem: &str) -> Result<TrainConfig, TrainError> {
-        let text = toml::to_string(&table).map_err(|e| TrainError::ConfigValue {
+    fn from_table(
+        path: &Path,
+        table: toml::Table,
+        stem: &str,
+    ) -> Result<TrainConfig, TrainConfigError> {
+        let text = toml::to_string(&table).map_err(|e| TrainConfigError::Value {
             path: path.to_path_buf(),
             field: "(file)".into(),
             message: e.to_string(),
@@ -396,9 +417,9 @@ impl TrainConfig {
     }
 
     /// Checks every value; errors name `path` and the field.
-    pub fn validate(&self, path: &Path) -> Result<(), TrainError> {
+    pub fn validate(&self, path: &Path) -> Result<(), TrainConfigError> {
         let bad = |field: &str, message: String| {
-            Err(TrainError::ConfigValue {
+            Err(TrainConfigError::Value {
                 path: path.to_path_buf(),
                 field: field.to_string(),
                 message,
@@ -517,8 +538,8 @@ impl TrainConfig {
 
     /// The resolved config as TOML text, which [`TrainConfig::parse`] reads back to an
     /// equal config.
-    pub fn to_toml_string(&self) -> Result<String, TrainError> {
-        let err = |e: &dyn std::fmt::Display| TrainError::ConfigValue {
+    pub fn to_toml_string(&self) -> Result<String, TrainConfigError> {
+        let err = |e: &dyn std::fmt::Display| TrainConfigError::Value {
             path: PathBuf::from("config.toml"),
             field: "(serialise)".into(),
             message: e.to_string(),
