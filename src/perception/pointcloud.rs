@@ -322,15 +322,49 @@ fn finish(path: &Path, raw: Vec<[f64; 3]>) -> Result<PointCloud, CloudError> {
 /// Parses PCD `bytes` read from `path` (used in error messages).
 pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
     let (header, data_start) = split_header(path, bytes, |l| l.starts_with("DATA"), "DATA")?;
-    let mut fields: Option<(usize, Vec<String>)> = None;
-    let mut sizes: Option<(usize, Vec<usize>)> = None;
-    let mut types: Option<(usize, Vec<String>)> = None;
-    let mut counts: Option<(usize, Vec<usize>)> = None;
-    let mut width: Option<usize> = None;
-    let mut height: Option<usize> = None;
-    let mut npoints: Option<(usize, usize)> = None;
-    let mut data_kind = "";
-    for &(no, line) in &header {
+    let h = pcd_header(path, &header)?;
+    let data_kind = h.data_kind;
+    let layout = pcd_layout(path, h)?;
+    let data = &bytes[data_start..];
+    let data_line0 = header.last().map(|h| h.0).unwrap_or(0);
+    let raw = match data_kind {
+        "ascii" => pcd_ascii(path, &layout, data, data_line0)?,
+        "binary" => pcd_binary(path, &layout, data)?,
+        "binary_compressed" => {
+            return Err(fmt_err(
+                path,
+                Some(data_line0),
+                "DATA binary_compressed is not supported: save as ascii or binary",
+            ))
+        }
+        other => {
+            return Err(fmt_err(
+                path,
+                Some(data_line0),
+                format!("unknown DATA kind '{other}' (expected ascii or binary)"),
+            ))
+        }
+    };
+    finish(path, raw)
+}
+
+/// A PCD header's fields as read, each with its line where a later check names it.
+#[derive(Default)]
+struct PcdHeader<'a> {
+    fields: Option<(usize, Vec<String>)>,
+    sizes: Option<(usize, Vec<usize>)>,
+    types: Option<(usize, Vec<String>)>,
+    counts: Option<(usize, Vec<usize>)>,
+    width: Option<usize>,
+    height: Option<usize>,
+    npoints: Option<(usize, usize)>,
+    data_kind: &'a str,
+}
+
+/// Reads the header lines `(line number, text)` of a PCD file.
+fn pcd_header<'a>(path: &Path, header: &[(usize, &'a str)]) -> Result<PcdHeader<'a>, CloudError> {
+    let mut h = PcdHeader::default();
+    for &(no, line) in header {
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
@@ -343,21 +377,21 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
         };
         match key {
             "VERSION" | "VIEWPOINT" => {}
-            "FIELDS" => fields = Some((no, rest.iter().map(|s| s.to_string()).collect())),
+            "FIELDS" => h.fields = Some((no, rest.iter().map(|s| s.to_string()).collect())),
             "SIZE" => {
                 let v = rest
                     .iter()
                     .map(|s| num(s, "SIZE"))
                     .collect::<Result<_, _>>()?;
-                sizes = Some((no, v));
+                h.sizes = Some((no, v));
             }
-            "TYPE" => types = Some((no, rest.iter().map(|s| s.to_string()).collect())),
+            "TYPE" => h.types = Some((no, rest.iter().map(|s| s.to_string()).collect())),
             "COUNT" => {
                 let v = rest
                     .iter()
                     .map(|s| num(s, "COUNT"))
                     .collect::<Result<_, _>>()?;
-                counts = Some((no, v));
+                h.counts = Some((no, v));
             }
             "WIDTH" | "HEIGHT" | "POINTS" => {
                 let [v] = rest.as_slice() else {
@@ -365,12 +399,12 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
                 };
                 let v = num(v, key)?;
                 match key {
-                    "WIDTH" => width = Some(v),
-                    "HEIGHT" => height = Some(v),
-                    _ => npoints = Some((no, v)),
+                    "WIDTH" => h.width = Some(v),
+                    "HEIGHT" => h.height = Some(v),
+                    _ => h.npoints = Some((no, v)),
                 }
             }
-            "DATA" => data_kind = rest.first().copied().unwrap_or(""),
+            "DATA" => h.data_kind = rest.first().copied().unwrap_or(""),
             other => {
                 return Err(fmt_err(
                     path,
@@ -380,6 +414,33 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
             }
         }
     }
+    Ok(h)
+}
+
+/// Where each point's x, y and z lie in a PCD record, checked against the header.
+struct PcdLayout {
+    fields: Vec<String>,
+    scalars: Vec<Scalar>,
+    counts: Vec<usize>,
+    /// The fields holding x, y and z.
+    xyz: [usize; 3],
+    /// POINTS, and its header line.
+    n: usize,
+    points_line: usize,
+}
+
+/// Checks a PCD header's fields against each other (every error names its line).
+fn pcd_layout(path: &Path, h: PcdHeader) -> Result<PcdLayout, CloudError> {
+    let PcdHeader {
+        fields,
+        sizes,
+        types,
+        counts,
+        width,
+        height,
+        npoints,
+        ..
+    } = h;
     let missing = |f: &str| fmt_err(path, None, format!("header field {f} is missing"));
     let (fl, fields) = fields.ok_or_else(|| missing("FIELDS"))?;
     let (sl, sizes) = sizes.ok_or_else(|| missing("SIZE"))?;
@@ -462,109 +523,126 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PointCloud, CloudError> {
             ));
         }
     }
-    let data = &bytes[data_start..];
-    let data_line0 = header.last().map(|h| h.0).unwrap_or(0);
-    let raw = match data_kind {
-        "ascii" => {
-            // Column of each field's first value in a text line.
-            let mut col = Vec::with_capacity(fields.len());
-            let mut c = 0;
-            for &cnt in &counts {
-                col.push(c);
-                c += cnt;
-            }
-            let ncols = c;
-            // Each point takes a line: at least one character and its newline (a loose
-            // bound, so that a short line still gets its own error below).
-            check_count_fits(path, Some(pl), "POINTS", n, 2, data.len())?;
-            let text = std::str::from_utf8(data)
-                .map_err(|_| fmt_err(path, None, "ASCII data is not UTF-8 text"))?;
-            let mut raw = Vec::with_capacity(n);
-            for (i, line) in text.lines().enumerate() {
-                let no = data_line0 + i + 1;
-                let line = line.trim();
-                if line.is_empty() {
-                    continue;
-                }
-                if raw.len() == n {
-                    return Err(fmt_err(
-                        path,
-                        Some(no),
-                        format!("more than POINTS {n} points"),
-                    ));
-                }
-                let vals: Vec<&str> = line.split_whitespace().collect();
-                if vals.len() != ncols {
-                    return Err(fmt_err(
-                        path,
-                        Some(no),
-                        format!("expected {ncols} values, found {}", vals.len()),
-                    ));
-                }
-                let mut p = [0.0; 3];
-                for a in 0..3 {
-                    let v = vals[col[xyz[a]]];
-                    p[a] = v.parse::<f64>().map_err(|_| {
-                        fmt_err(
-                            path,
-                            Some(no),
-                            format!("field {}: '{v}' is not a number", fields[xyz[a]]),
-                        )
-                    })?;
-                }
-                raw.push(p);
-            }
-            if raw.len() != n {
-                return Err(fmt_err(
-                    path,
-                    None,
-                    format!("header says POINTS {n} but the data has {}", raw.len()),
-                ));
-            }
-            raw
+    Ok(PcdLayout {
+        fields,
+        scalars,
+        counts,
+        xyz,
+        n,
+        points_line: pl,
+    })
+}
+
+/// The x, y, z of every point of a PCD file's ASCII data (its first line follows header
+/// line `data_line0`).
+fn pcd_ascii(
+    path: &Path,
+    layout: &PcdLayout,
+    data: &[u8],
+    data_line0: usize,
+) -> Result<Vec<[f64; 3]>, CloudError> {
+    let PcdLayout {
+        fields,
+        counts,
+        xyz,
+        n,
+        points_line: pl,
+        ..
+    } = layout;
+    let (n, pl) = (*n, *pl);
+    // Column of each field's first value in a text line.
+    let mut col = Vec::with_capacity(fields.len());
+    let mut c = 0;
+    for &cnt in counts {
+        col.push(c);
+        c += cnt;
+    }
+    let ncols = c;
+    // Each point takes a line: at least one character and its newline (a loose
+    // bound, so that a short line still gets its own error below).
+    check_count_fits(path, Some(pl), "POINTS", n, 2, data.len())?;
+    let text = std::str::from_utf8(data)
+        .map_err(|_| fmt_err(path, None, "ASCII data is not UTF-8 text"))?;
+    let mut raw = Vec::with_capacity(n);
+    for (i, line) in text.lines().enumerate() {
+        let no = data_line0 + i + 1;
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
         }
-        "binary" => {
-            let mut offs = Vec::with_capacity(fields.len());
-            let mut o = 0;
-            for k in 0..fields.len() {
-                offs.push(o);
-                o += scalars[k].size() * counts[k];
-            }
-            let rec = o;
-            let need = rec.saturating_mul(n);
-            if data.len() < need {
-                return Err(fmt_err(
-                    path,
-                    None,
-                    format!(
-                        "binary data has {} bytes, POINTS {n} x {rec} bytes needs {need}",
-                        data.len()
-                    ),
-                ));
-            }
-            (0..n)
-                .map(|i| {
-                    let r = &data[i * rec..(i + 1) * rec];
-                    std::array::from_fn(|a| scalars[xyz[a]].read_le(&r[offs[xyz[a]]..]))
-                })
-                .collect()
-        }
-        "binary_compressed" => {
+        if raw.len() == n {
             return Err(fmt_err(
                 path,
-                Some(data_line0),
-                "DATA binary_compressed is not supported: save as ascii or binary",
-            ))
+                Some(no),
+                format!("more than POINTS {n} points"),
+            ));
         }
-        other => {
+        let vals: Vec<&str> = line.split_whitespace().collect();
+        if vals.len() != ncols {
             return Err(fmt_err(
                 path,
-                Some(data_line0),
-                format!("unknown DATA kind '{other}' (expected ascii or binary)"),
-            ))
+                Some(no),
+                format!("expected {ncols} values, found {}", vals.len()),
+            ));
         }
-    };
-    finish(path, raw)
+        let mut p = [0.0; 3];
+        for a in 0..3 {
+            let v = vals[col[xyz[a]]];
+            p[a] = v.parse::<f64>().map_err(|_| {
+                fmt_err(
+                    path,
+                    Some(no),
+                    format!("field {}: '{v}' is not a number", fields[xyz[a]]),
+                )
+            })?;
+        }
+        raw.push(p);
+    }
+    if raw.len() != n {
+        return Err(fmt_err(
+            path,
+            None,
+            format!("header says POINTS {n} but the data has {}", raw.len()),
+        ));
+    }
+    Ok(raw)
+}
+
+/// The x, y, z of every point of a PCD file's binary data.
+fn pcd_binary(path: &Path, layout: &PcdLayout, data: &[u8]) -> Result<Vec<[f64; 3]>, CloudError> {
+    let PcdLayout {
+        fields,
+        scalars,
+        counts,
+        xyz,
+        n,
+        ..
+    } = layout;
+    let n = *n;
+    let mut offs = Vec::with_capacity(fields.len());
+    let mut o = 0;
+    for k in 0..fields.len() {
+        offs.push(o);
+        o += scalars[k].size() * counts[k];
+    }
+    let rec = o;
+    let need = rec.saturating_mul(n);
+    if data.len() < need {
+        return Err(fmt_err(
+            path,
+            None,
+            format!(
+                "binary data has {} bytes, POINTS {n} x {rec} bytes needs {need}",
+                data.len()
+            ),
+        ));
+    }
+    Ok((0..n)
+        .map(|i| {
+            let r = &data[i * rec..(i + 1) * rec];
+            std::array::from_fn(|a| scalars[xyz[a]].read_le(&r[offs[xyz[a]]..]))
+        })
+        .collect())
 }
 
 #[derive(Debug, Clone)]

@@ -394,6 +394,42 @@ impl Default for SimConfig {
     }
 }
 
+/// A range error of `field`.
+fn bad(field: &str, value: f64, message: &str) -> SimConfigError {
+    SimConfigError::Range {
+        field: field.into(),
+        value,
+        message: message.into(),
+    }
+}
+
+/// `v` must be finite and positive.
+fn pos(f: &str, v: f64) -> Result<(), SimConfigError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(bad(f, v, "must be a finite number > 0"))
+    }
+}
+
+/// `v` must be finite and not negative.
+fn nonneg(f: &str, v: f64) -> Result<(), SimConfigError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(bad(f, v, "must be a finite number >= 0"))
+    }
+}
+
+/// A friction coefficient: in [0, 1].
+fn fric(f: &str, v: f64) -> Result<(), SimConfigError> {
+    if v.is_finite() && (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(bad(f, v, "friction must be in [0, 1]"))
+    }
+}
+
 /// The shipped simulator config, from the repository root: it holds the built-in
 /// defaults.
 pub const DEFAULT_PATH: &str = "configs/sim.toml";
@@ -432,34 +468,17 @@ impl SimConfig {
 
     /// Checks every number's range; the error names the first bad field.
     pub fn validate(&self) -> Result<(), SimConfigError> {
-        fn bad(field: &str, value: f64, message: &str) -> SimConfigError {
-            SimConfigError::Range {
-                field: field.into(),
-                value,
-                message: message.into(),
-            }
-        }
-        let pos = |f: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(f, v, "must be a finite number > 0"))
-            }
-        };
-        let nonneg = |f: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(bad(f, v, "must be a finite number >= 0"))
-            }
-        };
-        let fric = |f: &str, v: f64| {
-            if v.is_finite() && (0.0..=1.0).contains(&v) {
-                Ok(())
-            } else {
-                Err(bad(f, v, "friction must be in [0, 1]"))
-            }
-        };
+        self.check_solver()?;
+        self.check_contacts()?;
+        self.check_control_and_gravity()?;
+        self.check_drives_and_sensors()?;
+        self.check_lift()?;
+        self.check_failure()?;
+        Ok(())
+    }
+
+    /// The integrator and solver: time step, iterations, damping, margins.
+    fn check_solver(&self) -> Result<(), SimConfigError> {
         pos("dt", self.dt)?;
         // Bounded below too: a tiny step passes `> 0` but never finishes an episode.
         if !(MIN_DT..=0.05).contains(&self.dt) {
@@ -504,6 +523,11 @@ impl SimConfig {
                 "must be at most 0.1 m",
             ));
         }
+        Ok(())
+    }
+
+    /// The contact model: stiffness, damping, the table hull, recycling.
+    fn check_contacts(&self) -> Result<(), SimConfigError> {
         let c = &self.contacts;
         for (field, v) in [
             ("contacts.natural_frequency", c.natural_frequency),
@@ -541,6 +565,11 @@ impl SimConfig {
                 "must be at most 0.1 m",
             ));
         }
+        Ok(())
+    }
+
+    /// The control period and gravity (which must pull down).
+    fn check_control_and_gravity(&self) -> Result<(), SimConfigError> {
         pos("control_period", self.control_period)?;
         if self.control_period < self.dt {
             return Err(bad(
@@ -569,6 +598,11 @@ impl SimConfig {
                  none or upward gravity an object floats and every lift is judged a success",
             ));
         }
+        Ok(())
+    }
+
+    /// The drives, friction and sensors.
+    fn check_drives_and_sensors(&self) -> Result<(), SimConfigError> {
         for (name, g) in [
             ("fingers", self.motors.fingers),
             ("thumb", self.motors.thumb),
@@ -607,6 +641,11 @@ impl SimConfig {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The lift test: heights and times.
+    fn check_lift(&self) -> Result<(), SimConfigError> {
         pos("lift.height", self.lift.height)?;
         if self.lift.height > 1.0 {
             return Err(bad("lift.height", self.lift.height, "must be at most 1 m"));
@@ -639,6 +678,11 @@ impl SimConfig {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The physics-failure thresholds, and contacts stiff enough to rest on within them.
+    fn check_failure(&self) -> Result<(), SimConfigError> {
         pos("failure.max_speed", self.failure.max_speed)?;
         pos("failure.max_object_travel", self.failure.max_object_travel)?;
         pos("failure.max_penetration", self.failure.max_penetration)?;

@@ -32,13 +32,12 @@
 //! clones it, gives it a fresh pipeline, broad phase, narrow phase and island manager,
 //! writes the start posture into the joint coordinates and places hand and object.
 
-use super::config::{CoriolisModel, DriveModel, LimitRows, SimConfig};
+use super::config::{DriveModel, LimitRows, SimConfig};
 use super::contact::HullContactDispatcher;
 use super::object::{ObjectError, ObjectSpec};
 use super::placement::{hand_root_pose, PlacementError};
 use super::sensors::{near_limit, pd_effort, spring_rest, Sensors};
 use crate::robot::joints::{COUPLED_FINGERS, HAND_JOINTS};
-use crate::robot::model::{Geometry, JointKind};
 use crate::robot::Robot;
 use crate::util::levels::torque_level;
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
@@ -46,6 +45,8 @@ use rand::{Rng, SeedableRng};
 use rapier3d::prelude::*;
 use serde::{Deserialize, Serialize};
 
+#[path = "build.rs"]
+mod build;
 #[path = "record.rs"]
 pub mod record;
 
@@ -458,317 +459,23 @@ impl HandSim {
             impulse_joints: ImpulseJointSet::new(),
             multibody_joints: MultibodyJointSet::new(),
         };
-        let min = CoefficientCombineRule::Min;
-        // Table: top at z = 0.
-        let table_body = sets
-            .bodies
-            .insert(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.0, -0.05)));
-        let table = sets.colliders.insert_with_parent(
-            ColliderBuilder::cuboid(1.0, 1.0, 0.05)
-                .friction(cfg.friction.table as f32)
-                .friction_combine_rule(min)
-                .collision_groups(InteractionGroups::new(
-                    TABLE_GROUP,
-                    HAND_GROUP | OBJECT_GROUP | OBJECT_HULL_GROUP,
-                    InteractionTestMode::And,
-                )),
-            table_body,
-            &mut sets.bodies,
-        );
-        // Hand.
-        let err = |message: String| SimError::Robot {
-            robot: robot.source.display().to_string(),
-            message,
-        };
+        // The order of insertion fixes every handle: table, bodies, colliders, joints.
+        let table = build::table(&mut sets, &cfg);
         let mb_root = sets.bodies.insert(RigidBodyBuilder::fixed());
-        // Body of each link and the link's pose in that body's frame.
-        let mut link_body: Vec<Option<(RigidBodyHandle, Isometry3<f64>)>> =
-            vec![None; robot.links.len()];
-        let mut body_links: Vec<BodyLinks> = Vec::new();
-        // Bodies are created first (masses need all merged links), joints afterwards.
-        let root = robot.root;
-        let mut pending: Vec<(usize, usize)> = Vec::new(); // (joint index, child link)
-        let new_body = |sets: &mut Sets| {
-            sets.bodies
-                .insert(RigidBodyBuilder::dynamic().can_sleep(false))
-        };
-        let rb_root = new_body(&mut sets);
-        link_body[root] = Some((rb_root, Isometry3::identity()));
-        body_links.push((rb_root, vec![(root, Isometry3::identity())]));
-        for (k, j) in robot.joints.iter().enumerate() {
-            let Some((pb, poff)) = link_body[j.parent] else {
-                return Err(err(format!("joint '{}' has an unplaced parent", j.name)));
-            };
-            match j.kind {
-                JointKind::Fixed => {
-                    let off = poff * j.origin;
-                    link_body[j.child] = Some((pb, off));
-                    if let Some(e) = body_links.iter_mut().find(|(b, _)| *b == pb) {
-                        e.1.push((j.child, off));
-                    }
-                }
-                JointKind::Revolute | JointKind::Continuous => {
-                    let b = new_body(&mut sets);
-                    link_body[j.child] = Some((b, Isometry3::identity()));
-                    body_links.push((b, vec![(j.child, Isometry3::identity())]));
-                    pending.push((k, j.child));
-                }
-                JointKind::Prismatic => {
-                    return Err(err(format!(
-                        "joint '{}': prismatic hand joints are not supported",
-                        j.name
-                    )))
-                }
-            }
-        }
-        // Mass properties and colliders per body.
-        let mut hand_colliders = Vec::new();
-        let mut collider_links = Vec::new();
-        let mut distal_colliders: [Vec<ColliderHandle>; 5] = Default::default();
-        let groups = InteractionGroups::new(
-            HAND_GROUP,
-            TABLE_GROUP | OBJECT_GROUP,
-            InteractionTestMode::And,
-        );
-        for (b, links) in &body_links {
-            let mut mp = MassProperties::default();
-            let mut mass = 0.0;
-            for (l, off) in links {
-                if let Some(i) = &robot.links[*l].inertial {
-                    let m3 = i.inertia.map(|v| v as f32);
-                    let inertia = rapier3d::math::Matrix::from_cols_array(&[
-                        m3[(0, 0)],
-                        m3[(1, 0)],
-                        m3[(2, 0)],
-                        m3[(0, 1)],
-                        m3[(1, 1)],
-                        m3[(2, 1)],
-                        m3[(0, 2)],
-                        m3[(1, 2)],
-                        m3[(2, 2)],
-                    ]);
-                    let local =
-                        MassProperties::with_inertia_matrix(Vector::ZERO, i.mass as f32, inertia);
-                    mp += local.transform_by(&pose_f32(&(off * i.origin)));
-                    mass += i.mass;
-                }
-            }
-            if mass <= 0.0 {
-                let r = 0.01f32;
-                let m = MIN_LINK_MASS as f32;
-                mp = MassProperties::new(Vector::ZERO, m, Vector::splat(0.4 * m * r * r));
-            }
-            if let Some(rb) = sets.bodies.get_mut(*b) {
-                rb.set_additional_mass_properties(mp, false);
-            }
-            for (l, off) in links {
-                let link = &robot.links[*l];
-                for c in &link.collisions {
-                    let pose = off * c.origin;
-                    let (shape, extra) = match &c.geometry {
-                        Geometry::Cuboid { half } => (
-                            SharedShape::cuboid(half.x as f32, half.y as f32, half.z as f32),
-                            Isometry3::identity(),
-                        ),
-                        Geometry::Cylinder { radius, length } => (
-                            SharedShape::cylinder((length / 2.0) as f32, *radius as f32),
-                            Isometry3::rotation(Vector3::x() * std::f64::consts::FRAC_PI_2),
-                        ),
-                        Geometry::Capsule { radius, length } => (
-                            SharedShape::capsule_z((length / 2.0) as f32, *radius as f32),
-                            Isometry3::identity(),
-                        ),
-                        // A sphere is simulated as a capsule 0.2 mm long (the same surface
-                        // within 0.1 mm). parry's ball-vs-convex-polyhedron contact query
-                        // sometimes returns a bogus penetration of about 2 cm while the ball
-                        // is 3 mm away (traced: a fingertip at the 738-vertex egg hull went
-                        // from +3.0 mm to -22.8 mm in one step with 0.6 mm of motion); the
-                        // general convex path used for capsules does not. Baseline 2, 38
-                        // episodes: physics failures 11 -> 1 (unseen) and 3 -> 2 (train).
-                        Geometry::Sphere { radius } => (
-                            SharedShape::capsule_z(SPHERE_AS_CAPSULE_HALF_LENGTH, *radius as f32),
-                            Isometry3::identity(),
-                        ),
-                        Geometry::Mesh { path, .. } => {
-                            return Err(err(format!(
-                                "link '{}': mesh collision '{}' is not supported by the simulator \
-                                 (use primitive collision geometry)",
-                                link.name,
-                                path.display()
-                            )))
-                        }
-                    };
-                    let h = sets.colliders.insert_with_parent(
-                        ColliderBuilder::new(shape)
-                            .position(pose_f32(&(pose * extra)))
-                            .mass_properties(MassProperties::default())
-                            .friction(cfg.friction.hand as f32)
-                            .friction_combine_rule(min)
-                            .collision_groups(groups),
-                        *b,
-                        &mut sets.bodies,
-                    );
-                    hand_colliders.push(h);
-                    collider_links.push((h, link.name.clone()));
-                    for f in 0..5 {
-                        if link_body[robot.hand.distal[f]].map(|x| x.0) == Some(*b) {
-                            distal_colliders[f].push(h);
-                        }
-                    }
-                }
-            }
-        }
-        // The lift joint (frames set at reset).
-        let motor_rows = cfg.drive == DriveModel::MotorRow;
-        let mut lift = GenericJointBuilder::new(JointAxesMask::LOCKED_PRISMATIC_AXES).limits(
-            JointAxis::LinX,
-            [LIFT_LIMITS[0] as f32, LIFT_LIMITS[1] as f32],
-        );
-        if motor_rows {
-            lift = lift
-                .motor_model(JointAxis::LinX, MotorModel::ForceBased)
-                .motor_max_force(JointAxis::LinX, cfg.motors.lift_max_force as f32)
-                .motor_position(
-                    JointAxis::LinX,
-                    0.0,
-                    cfg.motors.lift.kp as f32,
-                    cfg.motors.lift.kd as f32,
-                );
-        }
-        let lift = lift.build();
-        sets.multibody_joints
-            .insert(mb_root, rb_root, lift, true)
-            .ok_or_else(|| err("cannot attach the forearm to the lift".into()))?;
-        // Revolute joints.
-        let mut joint_handles = vec![None; robot.joints.len()];
-        for (k, child) in pending {
-            let j = &robot.joints[k];
-            let (pb, poff) = link_body[j.parent].ok_or_else(|| err("unplaced link".into()))?;
-            let (cb, _) = link_body[child].ok_or_else(|| err("unplaced link".into()))?;
-            let a = x_to(&j.axis);
-            let f1 = poff * j.origin * Isometry3::from_parts(Default::default(), a);
-            let f2 = Isometry3::from_parts(Default::default(), a);
-            let name = crate::robot::joints::canonical_name(&j.name);
-            let gains = if name.starts_with("WR") {
-                cfg.motors.wrist
-            } else if name.starts_with("TH") {
-                cfg.motors.thumb
-            } else {
-                cfg.motors.fingers
-            };
-            let mut b = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-                .local_frame1(pose_f32(&f1))
-                .local_frame2(pose_f32(&f2));
-            if motor_rows {
-                b = b
-                    .motor_model(JointAxis::AngX, MotorModel::ForceBased)
-                    .motor_max_force(JointAxis::AngX, j.effort as f32)
-                    .motor_position(JointAxis::AngX, 0.0, gains.kp as f32, gains.kd as f32);
-            }
-            if j.kind == JointKind::Revolute {
-                b = b.limits(JointAxis::AngX, [j.lower as f32, j.upper as f32]);
-            }
-            let h = sets
-                .multibody_joints
-                .insert(pb, cb, b.build(), true)
-                .ok_or_else(|| err(format!("joint '{}' closes a loop", j.name)))?;
-            joint_handles[k] = Some((h, gains));
-        }
-        // Hand joint table.
-        let mut joints = [HandJoint {
-            link: 0,
-            limited: false,
-            kp: 0.0,
-            kd: 0.0,
-            effort: 0.0,
-            lower: 0.0,
-            upper: 0.0,
-        }; 24];
-        for (n, &ji) in robot.hand.joints.iter().enumerate() {
-            let (h, gains) = joint_handles[ji]
-                .ok_or_else(|| err(format!("hand joint {} is not movable", HAND_JOINTS[n])))?;
-            let (_, link) = sets
-                .multibody_joints
-                .get(h)
-                .ok_or_else(|| err("lost a joint".into()))?;
-            let jj = &robot.joints[ji];
-            joints[n] = HandJoint {
-                link,
-                limited: jj.kind == JointKind::Revolute,
-                kp: gains.kp,
-                kd: gains.kd,
-                effort: jj.effort,
-                lower: jj.lower,
-                upper: jj.upper,
-            };
-        }
-        let lift_link = sets
-            .multibody_joints
-            .rigid_body_link(rb_root)
-            .map(|l| l.id)
-            .ok_or_else(|| err("lost the lift joint".into()))?;
-        // Rigid J1 = J2 coupling.
-        {
-            let mb_index = sets
-                .multibody_joints
-                .rigid_body_link(rb_root)
-                .map(|l| l.multibody)
-                .ok_or_else(|| err("lost the multibody".into()))?;
-            let mb = sets
-                .multibody_joints
-                .get_multibody_mut(mb_index)
-                .ok_or_else(|| err("lost the multibody".into()))?;
-            for f in COUPLED_FINGERS {
-                let j2 = super::hand_index(&format!("{f}J2"));
-                let j1 = super::hand_index(&format!("{f}J1"));
-                mb.add_dof_coupling(MultibodyDofCoupling {
-                    link1: joints[j2].link,
-                    dof1: 0,
-                    axis1: 3,
-                    link2: joints[j1].link,
-                    dof2: 0,
-                    axis2: 3,
-                    coeff: 1.0,
-                    offset: 0.0,
-                });
-            }
-            // Implicit drives: the PD law's damping on each driven DoF (the spring is set
-            // before every step, see `update_drives`).
-            if !motor_rows {
-                let mut dofs: Vec<(usize, f64)> = joints
-                    .iter()
-                    .filter_map(|hj| mb.link(hj.link).map(|l| (l.assembly_id(), hj.kd)))
-                    .collect();
-                if let Some(l) = mb.link(lift_link) {
-                    dofs.push((l.assembly_id(), cfg.motors.lift.kd));
-                }
-                let damping = mb.damping_mut();
-                for (dof, kd) in dofs {
-                    damping[dof] = kd as f32;
-                }
-            }
-            mb.set_implicit_coriolis(cfg.coriolis == CoriolisModel::Implicit);
-        }
-        let hand_bodies = body_links.iter().map(|(b, _)| *b).collect();
-        // Object placeholder handles, replaced by `set_object`.
-        let mut params = IntegrationParameters {
-            dt: cfg.dt as f32,
-            ..Default::default()
-        };
-        params.num_solver_iterations = cfg.substeps;
-        params.num_internal_pgs_iterations = cfg.pgs_iterations;
-        params.max_ccd_substeps = cfg.ccd_substeps;
-        params.contact_clustering = cfg.contact_clustering;
-        params.normalized_prediction_distance = cfg.prediction_distance as f32;
-        let c = cfg.contacts;
-        params.contact_recycling = c.recycle_distance > 0.0;
-        params.normalized_contact_recycle_distance = c.recycle_distance as f32;
-        params.contact_softness =
-            SpringCoefficients::new(c.natural_frequency as f32, c.damping_ratio as f32);
-        params.static_contact_softness = SpringCoefficients::new(
-            c.static_natural_frequency as f32,
-            c.static_damping_ratio as f32,
-        );
+        let bodies = build::hand_bodies(robot, &mut sets)?;
+        let colliders = build::hand_colliders(robot, &cfg, &mut sets, &bodies)?;
+        build::attach_lift(robot, &cfg, &mut sets, mb_root, bodies.root)?;
+        let handles = build::revolute_joints(robot, &cfg, &mut sets, &bodies)?;
+        let joints = build::joint_table(robot, &sets, &handles)?;
+        let lift_link = build::couple_and_damp(robot, &cfg, &mut sets, bodies.root, &joints)?;
+        let rb_root = bodies.root;
+        let hand_bodies = bodies.body_links.iter().map(|(b, _)| *b).collect();
+        let build::HandColliders {
+            all: hand_colliders,
+            links: collider_links,
+            distal: distal_colliders,
+        } = colliders;
+        let params = build::integration_parameters(&cfg);
         let narrow_phase = narrow_phase(&cfg, &sets, table);
         let mut sim = HandSim {
             cfg,
