@@ -422,12 +422,37 @@ fn fallback_geometry(child_offset: Option<Vector3<f64>>) -> Collision {
     }
 }
 
-fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, RobotError> {
-    let invalid = |element: String, message: String| RobotError::Invalid {
+/// An invalid element of the URDF at `path`.
+fn invalid(path: &Path, element: String, message: String) -> RobotError {
+    RobotError::Invalid {
         path: path.to_path_buf(),
         element,
         message,
-    };
+    }
+}
+
+fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, RobotError> {
+    let index = link_index(&u, path)?;
+    let (joints, parent_of) = parse_joints(&u, &index, path)?;
+    let (root, joints) = tree_order(&u, joints, &parent_of, path)?;
+    let links = parse_links(&u, &joints, path, policy)?;
+    let hand = hand_table(&links, &joints, path)?;
+    Ok(Robot {
+        name: u.name,
+        source: path.to_path_buf(),
+        links,
+        joints,
+        root,
+        hand,
+    })
+}
+
+/// Each link's index by name (every name once, at least one link).
+fn link_index<'a>(
+    u: &'a urdf_rs::Robot,
+    path: &Path,
+) -> Result<HashMap<&'a str, usize>, RobotError> {
+    let invalid = |element: String, message: String| invalid(path, element, message);
     let mut index: HashMap<&str, usize> = HashMap::new();
     for (k, l) in u.links.iter().enumerate() {
         if index.insert(l.name.as_str(), k).is_some() {
@@ -440,7 +465,20 @@ fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, Ro
     if u.links.is_empty() {
         return Err(invalid("robot".into(), "has no links".into()));
     }
-    // Joints.
+    Ok(index)
+}
+
+/// The joints in file order, checked, and each link's parent joint.
+type ParsedJoints = (Vec<Joint>, Vec<Option<usize>>);
+
+/// Reads and checks every joint: known links, one parent per link, finite poses, axes
+/// and limits.
+fn parse_joints(
+    u: &urdf_rs::Robot,
+    index: &HashMap<&str, usize>,
+    path: &Path,
+) -> Result<ParsedJoints, RobotError> {
+    let invalid = |element: String, message: String| invalid(path, element, message);
     let mut joints = Vec::with_capacity(u.joints.len());
     let mut seen_joint: HashMap<&str, ()> = HashMap::new();
     let mut parent_of: Vec<Option<usize>> = vec![None; u.links.len()];
@@ -525,6 +563,18 @@ fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, Ro
             velocity: j.limit.velocity,
         });
     }
+    Ok((joints, parent_of))
+}
+
+/// The tree's root link and the joints in breadth-first order from it (links never
+/// reached are in a cycle).
+fn tree_order(
+    u: &urdf_rs::Robot,
+    joints: Vec<Joint>,
+    parent_of: &[Option<usize>],
+    path: &Path,
+) -> Result<(usize, Vec<Joint>), RobotError> {
+    let invalid = |element: String, message: String| invalid(path, element, message);
     let roots: Vec<usize> = (0..u.links.len())
         .filter(|&k| parent_of[k].is_none())
         .collect();
@@ -554,8 +604,44 @@ fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, Ro
     if order.len() != joints.len() {
         return Err(invalid("robot".into(), "the joints contain a cycle".into()));
     }
-    let joints: Vec<Joint> = order.iter().map(|&k| joints[k].clone()).collect();
-    // Links.
+    Ok((root, order.iter().map(|&k| joints[k].clone()).collect()))
+}
+
+/// A link's inertial: `None` for a massless link; finite, non-negative values otherwise.
+fn inertial_of(l: &urdf_rs::Link, el: &str, path: &Path) -> Result<Option<Inertial>, RobotError> {
+    let invalid = |element: &str, message: String| invalid(path, element.to_string(), message);
+    let i = &l.inertial;
+    let m = i.mass.value;
+    let t = [
+        i.inertia.ixx,
+        i.inertia.ixy,
+        i.inertia.ixz,
+        i.inertia.iyy,
+        i.inertia.iyz,
+        i.inertia.izz,
+    ];
+    if !m.is_finite() || t.iter().any(|v| !v.is_finite()) || !finite_pose(&i.origin) {
+        return Err(invalid(el, "inertial has a non-finite number".into()));
+    }
+    if m < 0.0 {
+        return Err(invalid(el, format!("negative mass {m}")));
+    }
+    Ok((m > 0.0).then(|| Inertial {
+        mass: m,
+        origin: pose_of(&i.origin),
+        inertia: Matrix3::new(t[0], t[1], t[2], t[1], t[3], t[4], t[2], t[4], t[5]),
+    }))
+}
+
+/// Reads every link: its inertial and its collision geometry (a mesh not found is an
+/// error with `MeshPolicy::Strict`, else a primitive stand-in).
+fn parse_links(
+    u: &urdf_rs::Robot,
+    joints: &[Joint],
+    path: &Path,
+    policy: MeshPolicy,
+) -> Result<Vec<Link>, RobotError> {
+    let invalid = |element: String, message: String| invalid(path, element, message);
     let first_child_offset = |l: usize| {
         joints
             .iter()
@@ -565,29 +651,7 @@ fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, Ro
     let mut links = Vec::with_capacity(u.links.len());
     for (k, l) in u.links.iter().enumerate() {
         let el = format!("link '{}'", l.name);
-        let inertial = {
-            let i = &l.inertial;
-            let m = i.mass.value;
-            let t = [
-                i.inertia.ixx,
-                i.inertia.ixy,
-                i.inertia.ixz,
-                i.inertia.iyy,
-                i.inertia.iyz,
-                i.inertia.izz,
-            ];
-            if !m.is_finite() || t.iter().any(|v| !v.is_finite()) || !finite_pose(&i.origin) {
-                return Err(invalid(el, "inertial has a non-finite number".into()));
-            }
-            if m < 0.0 {
-                return Err(invalid(el, format!("negative mass {m}")));
-            }
-            (m > 0.0).then(|| Inertial {
-                mass: m,
-                origin: pose_of(&i.origin),
-                inertia: Matrix3::new(t[0], t[1], t[2], t[1], t[3], t[4], t[2], t[4], t[5]),
-            })
-        };
+        let inertial = inertial_of(l, &el, path)?;
         let mut collisions = Vec::new();
         for c in &l.collision {
             if !finite_pose(&c.origin) {
@@ -670,15 +734,7 @@ fn build(u: urdf_rs::Robot, path: &Path, policy: MeshPolicy) -> Result<Robot, Ro
             collisions,
         });
     }
-    let hand = hand_table(&links, &joints, path)?;
-    Ok(Robot {
-        name: u.name,
-        source: path.to_path_buf(),
-        links,
-        joints,
-        root,
-        hand,
-    })
+    Ok(links)
 }
 
 fn hand_table(links: &[Link], joints: &[Joint], path: &Path) -> Result<HandTable, RobotError> {
