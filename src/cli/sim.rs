@@ -5,7 +5,7 @@ use clap::{Args, ValueEnum};
 use grasp::objects::sets::{self, BuildContext};
 use grasp::robot::joints::{FINGERS, KEY_CLOSING_JOINTS};
 use grasp::robot::{Posture, Robot, Side};
-use grasp::sim::script::{close_and_lift, power_grasp, ScriptOptions};
+use grasp::sim::script::{close_and_lift, power_grasp, ScriptOptions, ScriptResult};
 use grasp::sim::{HandSim, ObjectShape, ObjectSpec, Scene};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -68,35 +68,7 @@ pub struct SimArgs {
 
 pub fn run(a: SimArgs, g: &Global) -> Result<()> {
     let cfg = super::sim_config(a.config.as_ref())?;
-    let mut obj = object_spec(&a.object)?;
-    if let Some(m) = a.mass {
-        obj.mass = m;
-    }
-    if let Some(f) = a.friction {
-        obj.friction = f;
-    }
-    obj.validate().context("--mass/--friction")?;
-    for (name, v) in [
-        ("--z-offset", a.z_offset.unwrap_or(0.0)),
-        ("--depth", a.depth),
-        ("--noise", a.noise),
-    ] {
-        if !v.is_finite() || v.abs() > 1.0 {
-            bail!(
-                "{name} = {}: must be finite and at most 1 m in size",
-                grasp::util::num::short(v)
-            );
-        }
-    }
-    if a.noise < 0.0 {
-        bail!(
-            "--noise = {}: must be >= 0",
-            grasp::util::num::short(a.noise)
-        );
-    }
-    if a.close_steps > 1000 || a.hold_steps > 1000 {
-        bail!("--close-steps/--hold-steps: at most 1000");
-    }
+    let obj = checked_object(&a)?;
     let start = match a.posture {
         StartPosture::Open => Posture::Open.angles(),
         StartPosture::CShape => Posture::CShape.angles(),
@@ -136,7 +108,57 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    let shape = match &obj.shape {
+    let shape = shape_line(&obj);
+    println!(
+        "{shape}, {:.3} kg, friction {:.2}; dt {:.5} s x {} substeps, control period {} s",
+        obj.mass,
+        obj.friction,
+        sim.config().dt,
+        sim.config().substeps,
+        sim.config().control_period
+    );
+    print_steps(&r);
+    print_outcome(&sim, &r, wall);
+    Ok(())
+}
+
+/// The object of `--object` with `--mass`/`--friction`, after every flag's range check.
+fn checked_object(a: &SimArgs) -> Result<ObjectSpec> {
+    let mut obj = object_spec(&a.object)?;
+    if let Some(m) = a.mass {
+        obj.mass = m;
+    }
+    if let Some(f) = a.friction {
+        obj.friction = f;
+    }
+    obj.validate().context("--mass/--friction")?;
+    for (name, v) in [
+        ("--z-offset", a.z_offset.unwrap_or(0.0)),
+        ("--depth", a.depth),
+        ("--noise", a.noise),
+    ] {
+        if !v.is_finite() || v.abs() > 1.0 {
+            bail!(
+                "{name} = {}: must be finite and at most 1 m in size",
+                grasp::util::num::short(v)
+            );
+        }
+    }
+    if a.noise < 0.0 {
+        bail!(
+            "--noise = {}: must be >= 0",
+            grasp::util::num::short(a.noise)
+        );
+    }
+    if a.close_steps > 1000 || a.hold_steps > 1000 {
+        bail!("--close-steps/--hold-steps: at most 1000");
+    }
+    Ok(obj)
+}
+
+/// The object's name, size and parts, in mm.
+fn shape_line(obj: &ObjectSpec) -> String {
+    match &obj.shape {
         ObjectShape::Box { half } => format!(
             "{} {:.0} x {:.0} x {:.0} mm",
             obj.name,
@@ -162,15 +184,11 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
             2000.0 * half[1],
             2000.0 * half[2]
         ),
-    };
-    println!(
-        "{shape}, {:.3} kg, friction {:.2}; dt {:.5} s x {} substeps, control period {} s",
-        obj.mass,
-        obj.friction,
-        sim.config().dt,
-        sim.config().substeps,
-        sim.config().control_period
-    );
+    }
+}
+
+/// One line per control step: phase, touch, torque levels, key joint angles, object height.
+fn print_steps(r: &ScriptResult) {
     let key: Vec<usize> = KEY_CLOSING_JOINTS
         .iter()
         .filter_map(|j| grasp::robot::joints::hand_index(j))
@@ -206,6 +224,10 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
             s.object_z
         );
     }
+}
+
+/// The physics failure, the deepest contact, the lift and the speed.
+fn print_outcome(sim: &HandSim, r: &ScriptResult, wall: f64) {
     if let Some(f) = sim.failure() {
         println!(
             "physics failure at physics step {}: {} ({f})",
@@ -240,7 +262,6 @@ pub fn run(a: SimArgs, g: &Global) -> Result<()> {
         wall,
         r.sim_time / wall.max(1e-9)
     );
-    Ok(())
 }
 
 /// The object of `--object`: the primitive `box` or `cylinder`, or the one library object

@@ -758,6 +758,64 @@ fn attempt_body<B: HandArm>(
         });
     }
     // 1. tau_j0 with the empty, still hand.
+    tendon_baseline(at, cfg)?;
+    // 2. Preshape, pre-grasp, grasp.
+    place_hand(at, plan, cfg)?;
+    // 3. Stage 1: the closing trajectory T until a fingertip touches.
+    let finger_limits = robot.finger_limits();
+    let path = ClosingPath::new(
+        env.closing,
+        &plan.preshape,
+        &script::power_grasp(),
+        &policy.synergy,
+        &finger_limits,
+    );
+    let (m, touched, updates) = stage1(at, &env, &path)?;
+    // 4. Stage 2: the policy.
+    let (m, steps, mut lifted) = stage2(at, robot, plan, policy, cfg, m)?;
+    let base_out = AttemptOutcome {
+        success: false,
+        reason: String::new(),
+        judged_by: String::new(),
+        stage1_updates: updates,
+        touched,
+        policy_steps: steps,
+        lifted,
+        clamped_commands: 0,
+        log_lines: 0,
+        time_s: 0.0,
+    };
+    if !lifted && env.at_max_steps == AtMaxSteps::Lift {
+        // The policy was trained to lift at the step cap.
+        lifted = true;
+        let hold = at.last_sent;
+        at.log_step(&m, Vec::new(), hold, Vec::new())?;
+    }
+    if !lifted {
+        return Ok(AttemptOutcome {
+            reason: format!(
+                "the policy did not decide to lift within {} steps",
+                env.max_steps
+            ),
+            judged_by: "pipeline".into(),
+            ..base_out
+        });
+    }
+    // 5. Lift and judge.
+    let (success, reason, judged_by) = lift_and_judge(at, cfg)?;
+    Ok(AttemptOutcome {
+        success,
+        reason,
+        judged_by: judged_by.into(),
+        ..base_out
+    })
+}
+
+/// Reads the empty, still hand's tendons `baseline_readings` times: tau_j0.
+fn tendon_baseline<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    cfg: &PipelineConfig,
+) -> Result<(), RunError> {
     let mut base = Vec::with_capacity(cfg.baseline_readings);
     for k in 0..cfg.baseline_readings {
         if k > 0 {
@@ -766,7 +824,16 @@ fn attempt_body<B: HandArm>(
         base.push(at.arm.read()?.tendon_raw);
     }
     at.mapper.set_baseline(base)?;
-    // 2. Preshape, pre-grasp, grasp.
+    Ok(())
+}
+
+/// Preshapes the hand (until within 0.05 rad), then moves the arm to the pre-grasp and the
+/// grasp pose.
+fn place_hand<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    plan: &GraspPlan,
+    cfg: &PipelineConfig,
+) -> Result<(), RunError> {
     let mut m = at.read()?;
     at.last_sent = m.raw.joint_angles;
     for _ in 0..cfg.preshape_commands {
@@ -783,19 +850,20 @@ fn attempt_body<B: HandArm>(
     }
     at.arm.move_arm(&ArmMotion::Joints(plan.pregrasp_q))?;
     at.arm.move_arm(&ArmMotion::Joints(plan.grasp_q))?;
-    // 3. Stage 1: the closing trajectory T until a fingertip touches.
-    let finger_limits = robot.finger_limits();
-    let path = ClosingPath::new(
-        env.closing,
-        &plan.preshape,
-        &script::power_grasp(),
-        &policy.synergy,
-        &finger_limits,
-    );
+    Ok(())
+}
+
+/// Stage 1: follows the closing trajectory until a fingertip touches; the last reading,
+/// whether a touch ended it and the target updates sent.
+fn stage1<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    env: &EnvConfig,
+    path: &ClosingPath,
+) -> Result<(Mapped, bool, usize), RunError> {
     let n = (env.closing_time / env.closing_period).round().max(1.0) as usize;
     let mut touched = false;
     let mut updates = 0;
-    m = at.read()?;
+    let mut m = at.read()?;
     for i in 1..=n {
         let t = path.target(i, n);
         m = at.command(&t, Vec::new(), env.closing_period)?;
@@ -805,7 +873,21 @@ fn attempt_body<B: HandArm>(
             break;
         }
     }
-    // 4. Stage 2: the policy.
+    Ok((m, touched, updates))
+}
+
+/// Stage 2: the policy acts from reading `m` until it lifts or reaches the step cap; the
+/// last reading, the steps and whether it decided to lift.
+fn stage2<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    robot: &Robot,
+    plan: &GraspPlan,
+    policy: &mut PolicyRunner,
+    cfg: &PipelineConfig,
+    mut m: Mapped,
+) -> Result<(Mapped, usize, bool), RunError> {
+    let env = policy.env.clone();
+    let finger_limits = robot.finger_limits();
     let hl = robot.hand_limits();
     let wrist_limits = [hl[0], hl[1]];
     let n_cont = env.action.continuous(policy.synergy.n_components());
@@ -864,35 +946,15 @@ fn attempt_body<B: HandArm>(
             &surface(&m.raw.joint_angles),
         ));
     }
-    let base_out = AttemptOutcome {
-        success: false,
-        reason: String::new(),
-        judged_by: String::new(),
-        stage1_updates: updates,
-        touched,
-        policy_steps: steps,
-        lifted,
-        clamped_commands: 0,
-        log_lines: 0,
-        time_s: 0.0,
-    };
-    if !lifted && env.at_max_steps == AtMaxSteps::Lift {
-        // The policy was trained to lift at the step cap.
-        lifted = true;
-        let hold = at.last_sent;
-        at.log_step(&m, Vec::new(), hold, Vec::new())?;
-    }
-    if !lifted {
-        return Ok(AttemptOutcome {
-            reason: format!(
-                "the policy did not decide to lift within {} steps",
-                env.max_steps
-            ),
-            judged_by: "pipeline".into(),
-            ..base_out
-        });
-    }
-    // 5. Lift and judge.
+    Ok((m, steps, lifted))
+}
+
+/// Lifts the arm and judges the grasp: the simulator's verdict where the backend has one,
+/// else at least `held_min_contacts` fingertips in contact.
+fn lift_and_judge<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    cfg: &PipelineConfig,
+) -> Result<(bool, String, &'static str), RunError> {
     at.arm.move_arm(&ArmMotion::Lift {
         height_m: cfg.lift_height_m,
         duration_s: cfg.lift_duration_s,
@@ -908,12 +970,7 @@ fn attempt_body<B: HandArm>(
     } else {
         format!("not held after the lift ({contacts} fingertips in contact)")
     };
-    Ok(AttemptOutcome {
-        success,
-        reason,
-        judged_by: judged_by.into(),
-        ..base_out
-    })
+    Ok((success, reason, judged_by))
 }
 
 #[cfg(test)]
