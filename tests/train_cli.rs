@@ -929,8 +929,8 @@ fn fig5_and_sensing_configs_change_one_thing_each() {
         c.name = s3.name.clone();
         assert_eq!(c, s3, "{file}");
     }
-    // Both grids plan: 7 variants x 3 seeds, and 3 x 2.
-    for (grid, runs) in [("grids/fig5.toml", 21), ("grids/sensing.toml", 6)] {
+    // Both grids plan: 7 variants x 3 seeds, and 3 x 3.
+    for (grid, runs) in [("grids/fig5.toml", 21), ("grids/sensing.toml", 9)] {
         let plan = grasp::experiment::plan(&dir.join(grid), Path::new("runs/x")).unwrap();
         assert_eq!(plan.runs.len(), runs, "{grid}");
     }
