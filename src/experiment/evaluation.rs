@@ -483,14 +483,19 @@ pub fn pooled_markdown(sets: &[PooledSet], e: &EvalSettings) -> String {
                     format!("{a} vs {b}, {p}")
                 }
             };
+            let success = if r.trials == 0 {
+                "-".to_string()
+            } else {
+                format!(
+                    "{:.1} [{:.1}, {:.1}]",
+                    100.0 * r.rate(),
+                    100.0 * r.ci95.0,
+                    100.0 * r.ci95.1
+                )
+            };
             out.push_str(&format!(
-                "| {} | {} | {} | {:.1} [{:.1}, {:.1}] | {vs} |\n",
-                r.variant,
-                r.label,
-                r.runs,
-                100.0 * r.rate(),
-                100.0 * r.ci95.0,
-                100.0 * r.ci95.1
+                "| {} | {} | {} | {success} | {vs} |\n",
+                r.variant, r.label, r.runs
             ));
         }
     }
@@ -516,6 +521,31 @@ mod tests {
         let (wa, wb, p) = paired_over_seeds(&a, &b).unwrap();
         assert_eq!((wa, wb), (10, 0));
         assert!((p - 2.0 / 1024.0).abs() < 1e-12, "{p}");
+    }
+
+    #[test]
+    fn a_variant_without_evaluated_runs_shows_a_dash() {
+        let e: EvalSettings = toml::from_str("objects = \"unseen\"\ntrials = 2").unwrap();
+        let row = |variant: &str, successes, trials, vs| PooledRow {
+            variant: variant.into(),
+            label: "GRU-M3PCA5".into(),
+            runs: usize::from(trials > 0),
+            successes,
+            trials,
+            ci95: wilson(successes, trials),
+            vs_reference: vs,
+        };
+        let md = pooled_markdown(
+            &[PooledSet {
+                ablation: "a".into(),
+                objects: "unseen".into(),
+                reference: "r".into(),
+                rows: vec![row("r", 3, 4, None), row("v", 0, 0, None)],
+            }],
+            &e,
+        );
+        assert!(md.contains("| r | GRU-M3PCA5 | 1 | 75.0 ["), "{md}");
+        assert!(md.contains("| v | GRU-M3PCA5 | 0 | - | - |"), "{md}");
     }
 
     #[test]
