@@ -237,8 +237,10 @@ def test_shipped_policy_and_baselines():
         ("ship_gru_m3g_pca5", 8),
         # The main job's policy: M3 and the grip, one action more than the paper's.
         ("grip_gru_m3_pca5", 9),
-        # The same recipe trained longer (204,800 transitions of a 1 M-transition run).
+        # The same recipe trained longer (354,816 transitions of a 1 M-transition run).
         ("grip_long_gru_m3_pca5", 9),
+        # The paper's observations and actions with 8 synergies: 8 + 2 + lift.
+        ("fig5_gru_m3_pca8", 11),
     ],
 )
 def test_shipped_policies_run_in_their_own_setup(policy, n_actions):
