@@ -164,17 +164,22 @@ pub fn unpaired_lines(results: &[AgentResult]) -> String {
         .collect()
 }
 
+/// A p-value as the reports print it: `p = 0.077`, or `p < 0.001` below 0.001.
+pub fn p_text(p: f64) -> String {
+    if p < 0.001 {
+        "p < 0.001".to_string()
+    } else {
+        format!("p = {p:.3}")
+    }
+}
+
 /// One line per comparison, e.g. `A vs B on identical start poses: only the first won 12
 /// trials, only the second 4, both 50, neither 29 (exact McNemar p = 0.077)`; p-values
 /// below 0.001 are printed as `p < 0.001`.
 pub fn paired_lines(pairs: &[Paired]) -> String {
     let mut s = String::new();
     for p in pairs {
-        let pv = if p.p_value < 0.001 {
-            "p < 0.001".to_string()
-        } else {
-            format!("p = {:.3}", p.p_value)
-        };
+        let pv = p_text(p.p_value);
         s.push_str(&format!(
             "{} vs {} on identical start poses: only the first won {} trials, only the second {}, both {}, neither {} (exact McNemar {pv})\n",
             p.agent, p.against, p.only_agent, p.only_against, p.both, p.neither

@@ -23,7 +23,7 @@ use crate::checkpoint::{files, latest_dir};
 use crate::env::curriculum::CurriculumConfig;
 use crate::env::grasp::{EnvConfig, GraspEnv};
 use crate::eval::conditions::EvalConditions;
-use crate::eval::paired::mcnemar_exact;
+use crate::eval::paired::{mcnemar_exact, p_text};
 use crate::eval::{evaluate, wilson, AgentSpec};
 use crate::perception::pregrasp::AntipodalPregrasp;
 use crate::robot::{Robot, Side};
@@ -359,13 +359,10 @@ pub struct PooledSet {
 }
 
 /// Per ablation and set, the pooled success of each variant and its paired comparison with
-/// the ablation's reference (its `reference` config, else its first).
-pub fn pooled(plan: &Plan) -> Vec<PooledSet> {
+/// the ablation's reference (its `reference` config, else its first), from the cached
+/// evaluations made in `conditions` (the grid's `perturb` file, as [`super::summarize`] read it).
+pub fn pooled(plan: &Plan, conditions: &Option<EvalConditions>) -> Vec<PooledSet> {
     let Some(e) = plan.grid.eval.as_ref().filter(|e| e.trials > 0) else {
-        return Vec::new();
-    };
-    // An unreadable conditions file matches no cache (evaluate_runs reports it).
-    let Ok(conditions) = e.conditions(&plan.path) else {
         return Vec::new();
     };
     let mut out = Vec::new();
@@ -385,7 +382,7 @@ pub fn pooled(plan: &Plan) -> Vec<PooledSet> {
                         .iter()
                         .filter(|r| r.variant == i)
                         .filter_map(|r| {
-                            cached_eval(plan, r, k, &conditions)
+                            cached_eval(plan, r, k, conditions)
                                 .map(|c| ((r.seed, c.seed), c.outcomes.concat()))
                         })
                         .collect()
@@ -475,12 +472,7 @@ pub fn pooled_markdown(sets: &[PooledSet], e: &EvalSettings) -> String {
             let vs = match r.vs_reference {
                 None => "-".to_string(),
                 Some((a, b, p)) => {
-                    let p = if p < 0.001 {
-                        "p < 0.001".to_string()
-                    } else {
-                        format!("p = {p:.3}")
-                    };
-                    format!("{a} vs {b}, {p}")
+                    format!("{a} vs {b}, {}", p_text(p))
                 }
             };
             let success = if r.trials == 0 {

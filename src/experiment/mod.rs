@@ -851,7 +851,7 @@ pub fn summarize(plan: &Plan) -> Result<(GridSummary, SeedCurves), ExperimentErr
             grid: g.name.clone(),
             variants,
             runs,
-            pooled: evaluation::pooled(plan),
+            pooled: evaluation::pooled(plan, &conditions),
             plots: Vec::new(),
         },
         curves,

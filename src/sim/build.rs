@@ -15,7 +15,7 @@ use nalgebra::{Isometry3, Vector3};
 use rapier3d::prelude::*;
 
 /// An error of the robot's model, naming its file.
-fn robot_err(robot: &Robot, message: String) -> SimError {
+pub(super) fn robot_err(robot: &Robot, message: String) -> SimError {
     SimError::Robot {
         robot: robot.source.display().to_string(),
         message,

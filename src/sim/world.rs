@@ -666,10 +666,7 @@ impl HandSim {
     }
 
     fn lost(&self) -> SimError {
-        SimError::Robot {
-            robot: self.robot.source.display().to_string(),
-            message: "the hand multibody was lost".into(),
-        }
+        build::robot_err(&self.robot, "the hand multibody was lost".into())
     }
 
     /// Clamps to limits and applies the J1 = J2 = J0/2 coupling.
