@@ -541,6 +541,24 @@ mod tests {
     }
 
     #[test]
+    fn a_bad_perturb_file_names_the_grid_field_and_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let grid = dir.path().join("g.toml");
+        let e: EvalSettings =
+            toml::from_str("objects = \"unseen\"\ntrials = 1\nperturb = \"c.toml\"").unwrap();
+        let err = e.conditions(&grid).unwrap_err().to_string();
+        assert!(
+            err.contains("eval.perturb") && err.contains("c.toml"),
+            "{err}"
+        );
+        std::fs::write(dir.path().join("c.toml"), "[placement]\noffset = 0.5\n").unwrap();
+        let err = e.conditions(&grid).unwrap_err().to_string();
+        assert!(err.contains("placement.offset"), "{err}");
+        std::fs::write(dir.path().join("c.toml"), "[placement]\noffset = 0.01\n").unwrap();
+        assert_eq!(e.conditions(&grid).unwrap().unwrap().placement.offset, 0.01);
+    }
+
+    #[test]
     fn one_set_or_many_and_cache_files() {
         let one: EvalSettings = toml::from_str("objects = \"unseen\"\ntrials = 2").unwrap();
         assert_eq!(one.objects, ["unseen"]);
