@@ -331,6 +331,31 @@ fn the_success_is_not_hard_wired_zero_friction_and_an_empty_grasp_fail() {
 }
 
 #[test]
+fn the_spatula_is_planned_across_its_narrow_axis_and_lifted() {
+    // The cameras' cloud of the spatula (lying flat) holds no usable antipodal pair: the
+    // plan closes across the cloud's narrow horizontal axis (the object's y axis), and
+    // the long grip policy lifts and holds it from there.
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("spatula.jsonl");
+    let (ok, v, err) = run_json(&[
+        "--policy",
+        "assets/policies/grip_long_gru_m3_pca5",
+        "--object",
+        "spatula",
+        "--seed",
+        "1",
+        "--log",
+        log.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(v["plan"]["fallback"], true, "{v:#}");
+    assert!(v["plan"]["score"].is_null(), "{v:#}");
+    let closing_y = v["plan"]["closing"][1].as_f64().unwrap();
+    assert!(closing_y.abs() > 0.99, "{v:#}");
+    assert_eq!(v["outcome"]["success"], true, "{v:#}");
+}
+
+#[test]
 fn the_m3g_policy_grasps_on_the_cameras_cloud_and_refuses_a_grasp_without_one() {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("m3g.jsonl");

@@ -382,6 +382,10 @@ fn attempt<B: HandArm>(
                     ", score {s:.3} (best reachable of {} candidates)",
                     plan.candidates
                 ),
+                None if plan.fallback => format!(
+                    ", across the cloud's narrow axis (no usable antipodal candidate of {})",
+                    plan.candidates
+                ),
                 None => String::new(),
             }
         );

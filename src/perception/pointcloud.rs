@@ -1179,6 +1179,48 @@ fn approach_for(d: &Vector3<f64>) -> Vector3<f64> {
         .unwrap_or_else(Vector3::y)
 }
 
+/// The top-down grasp across the cloud's narrowest horizontal extent: the fallback where
+/// the antipodal sampler finds no usable pair (a flat or thin object lying down, whose
+/// sides the cameras see at grazing angles or not at all).
+///
+/// The closing direction is the minor axis of the covariance of the points' horizontal
+/// coordinates: with `a = var(x)`, `b = cov(x, y)`, `c = var(y)`, the major axis lies at
+/// `theta = atan2(2b, a - c) / 2` and the closing direction at `theta + pi/2`, its sign
+/// chosen with a positive `x` (positive `y` when `x` is 0). The centre is the points'
+/// horizontal centroid at the middle of their height range; the approach is straight
+/// down. `None` for fewer than 3 points or non-finite coordinates.
+pub fn principal_axis_grasp(points: &[Point3<f64>]) -> Option<TwoFingerGrasp> {
+    if points.len() < 3
+        || points
+            .iter()
+            .any(|p| !p.coords.iter().all(|v| v.is_finite()))
+    {
+        return None;
+    }
+    let c = centroid(points);
+    let n = points.len() as f64;
+    let (mut a, mut b, mut cc) = (0.0, 0.0, 0.0);
+    let (mut zlo, mut zhi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in points {
+        let (dx, dy) = (p.x - c.x, p.y - c.y);
+        a += dx * dx;
+        b += dx * dy;
+        cc += dy * dy;
+        zlo = zlo.min(p.z);
+        zhi = zhi.max(p.z);
+    }
+    let theta = 0.5 * (2.0 * b / n).atan2((a - cc) / n) + std::f64::consts::FRAC_PI_2;
+    let (mut x, mut y) = (theta.cos(), theta.sin());
+    if x < -1e-12 || (x.abs() <= 1e-12 && y < 0.0) {
+        (x, y) = (-x, -y);
+    }
+    Some(TwoFingerGrasp {
+        center: Point3::new(c.x, c.y, 0.5 * (zlo + zhi)),
+        approach: -Vector3::z(),
+        closing: Vector3::new(x, y, 0.0),
+    })
+}
+
 /// The one-call pipeline from points to sorted candidates: normals by local PCA with
 /// `cfg.normal_k` neighbours (oriented away from the centroid), then [`antipodal_grasps`].
 pub fn grasp_candidates(
@@ -1529,5 +1571,40 @@ element vertex 2\nproperty double x\nproperty double y\nproperty double z\nprope
         let g = antipodal_grasps(&pts, &nrm3, &cfg).unwrap();
         assert!((g[0].alignment - (1.0 + t.cos()) / 2.0).abs() < 1e-12);
         assert!(antipodal_grasps(&pts, &nrm[..1], &cfg).is_err());
+    }
+
+    #[test]
+    fn principal_axis_grasp_hand_computed() {
+        // (+-2, 0, 0) and (0, +-1, 0.02): var x = 8/4 = 2, var y = 2/4 = 0.5, cov 0: the
+        // major axis is x (theta = 0), so the grasp closes along y, at the centroid, at
+        // the middle of the height range (0.01), straight down.
+        let pts = [
+            Point3::new(2.0, 0.0, 0.0),
+            Point3::new(-2.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.02),
+            Point3::new(0.0, -1.0, 0.02),
+        ];
+        let g = principal_axis_grasp(&pts).unwrap();
+        assert!((g.closing - Vector3::y()).norm() < 1e-12, "{}", g.closing);
+        assert!((g.center - Point3::new(0.0, 0.0, 0.01)).norm() < 1e-12);
+        assert_eq!(g.approach, -Vector3::z());
+        // The same cross turned by 0.5 rad and moved: the closing direction turns with it,
+        // (-sin 0.5, cos 0.5) with its sign flipped to a positive x.
+        let (s, c) = (0.5f64.sin(), 0.5f64.cos());
+        let moved: Vec<Point3<f64>> = pts
+            .iter()
+            .map(|p| Point3::new(c * p.x - s * p.y + 0.3, s * p.x + c * p.y - 0.1, p.z))
+            .collect();
+        let g = principal_axis_grasp(&moved).unwrap();
+        assert!(
+            (g.closing - Vector3::new(s, -c, 0.0)).norm() < 1e-12,
+            "{}",
+            g.closing
+        );
+        assert!((g.center - Point3::new(0.3, -0.1, 0.01)).norm() < 1e-12);
+        assert!(principal_axis_grasp(&pts[..2]).is_none());
+        let mut bad = pts.to_vec();
+        bad[1].y = f64::NAN;
+        assert!(principal_axis_grasp(&bad).is_none());
     }
 }

@@ -38,7 +38,7 @@ use crate::env::obs::{FrameStack, Modality, ObsLayout, N_SURFACE};
 use crate::eval::PolicyAgent;
 use crate::hardware::calibration::TactileCalibration;
 use crate::hardware::log::{AttemptLog, OutcomeRecord, StepRecord};
-use crate::hardware::pointcloud::{grasp_candidates, AntipodalConfig};
+use crate::hardware::pointcloud::{grasp_candidates, principal_axis_grasp, AntipodalConfig};
 use crate::hardware::safety::{SafeHandArm, SafetyConfig};
 use crate::hardware::torque::{TorqueMapper, REAL_THRESHOLDS};
 use crate::hardware::{ArmMotion, HandArm, RawSensors, N_HAND_JOINTS, N_TENDONS};
@@ -292,6 +292,9 @@ pub struct GraspPlan {
     pub candidates: usize,
     /// Candidates skipped before this one (not top-down, unreachable).
     pub skipped: usize,
+    /// Whether no antipodal candidate was usable and the grasp closes across the cloud's
+    /// narrowest horizontal extent instead ([`principal_axis_grasp`]).
+    pub fallback: bool,
     /// The hand preshape (24 angles, paper order).
     pub preshape: [f64; N_HAND_JOINTS],
     /// UR10e joints at the pre-grasp pose.
@@ -385,6 +388,7 @@ pub fn plan_grasp(
             score,
             candidates,
             skipped,
+            fallback: score.is_none() && matches!(source, GraspSource::Cloud(_)),
             preshape,
             pregrasp_q: q.0,
             grasp_q: q.1,
@@ -408,31 +412,6 @@ pub fn plan_grasp(
         }
         GraspSource::Cloud(points) => {
             let cands = grasp_candidates(points, &cfg.antipodal)?;
-            if cands.is_empty() {
-                // A hand-sized object spans centimetres: a cloud metres across is most
-                // likely in another unit.
-                let (lo, hi) = points.iter().fold(
-                    (
-                        Vector3::repeat(f64::INFINITY),
-                        Vector3::repeat(f64::NEG_INFINITY),
-                    ),
-                    |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
-                );
-                let span = (hi - lo).max();
-                let hint = if span > 2.0 {
-                    format!(
-                        "; the cloud spans {} m: its coordinates must be in metres (a \
-                         cloud in millimetres is 1000 times too large)",
-                        crate::util::num::short((span * 1000.0).round() / 1000.0)
-                    )
-                } else {
-                    String::new()
-                };
-                return Err(RunError::NoGrasp(format!(
-                    "the antipodal sampler found no two-finger grasp on the {} points of the cloud{hint}",
-                    points.len()
-                )));
-            }
             let mut skipped = 0;
             let mut first_err = None;
             for c in cands.iter().take(cfg.max_candidates) {
@@ -455,8 +434,44 @@ pub fn plan_grasp(
                     }
                 }
             }
+            // No usable candidate: across the cloud's narrowest horizontal extent, as the
+            // pre-grasp planner of evaluation and training does.
+            if let Some(g) = principal_axis_grasp(points) {
+                match solve_arm(robot, &preshape, &g, cfg) {
+                    Ok(q) => return Ok(make(&g, None, cands.len(), skipped, q)),
+                    Err(e) => {
+                        first_err.get_or_insert(e.to_string());
+                    }
+                }
+            }
+            if cands.is_empty() {
+                // A hand-sized object spans centimetres: a cloud metres across is most
+                // likely in another unit.
+                let (lo, hi) = points.iter().fold(
+                    (
+                        Vector3::repeat(f64::INFINITY),
+                        Vector3::repeat(f64::NEG_INFINITY),
+                    ),
+                    |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+                );
+                let span = (hi - lo).max();
+                let hint = if span > 2.0 {
+                    format!(
+                        "; the cloud spans {} m: its coordinates must be in metres (a \
+                         cloud in millimetres is 1000 times too large)",
+                        crate::util::num::short((span * 1000.0).round() / 1000.0)
+                    )
+                } else {
+                    String::new()
+                };
+                return Err(RunError::NoGrasp(format!(
+                    "the antipodal sampler found no two-finger grasp on the {} points of the cloud, and the grasp across its narrow axis is not usable{}{hint}",
+                    points.len(),
+                    first_err.map(|e| format!(" ({e})")).unwrap_or_default()
+                )));
+            }
             Err(RunError::NoGrasp(format!(
-                "{} candidates, none of the best {} usable{}{}",
+                "{} candidates, none of the best {} usable, nor the grasp across the cloud's narrow axis{}{}",
                 cands.len(),
                 cfg.max_candidates.min(cands.len()),
                 if cfg.top_down_only {
