@@ -367,9 +367,16 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 16);
-    // The modality ablation's arms: the main job with another modality, nothing else.
-    let quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
+    assert_eq!(n, 17);
+    // The main job until 2026-12-05 evening: the main job with 5 synergies, nothing else.
+    let mut quick = TrainConfig::load(&dir.join("quick_pca5.toml")).unwrap();
+    let main = TrainConfig::load(&dir.join("quick.toml")).unwrap();
+    assert_eq!((main.n_components, quick.n_components), (8, 5));
+    quick.n_components = main.n_components;
+    quick.name = main.name.clone();
+    assert_eq!(quick, main);
+    // The modality ablation's arms: that recipe with another modality, nothing else.
+    let quick = TrainConfig::load(&dir.join("quick_pca5.toml")).unwrap();
     // The main job with the placement mix: [env.placement] and milestones, nothing else.
     let mut placed = TrainConfig::load(&dir.join("quick_placement.toml")).unwrap();
     assert!(placed.env.grasp.placement.antipodal > 0.0 && placed.milestone_every > 0);
@@ -453,11 +460,13 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
         n += 1;
     }
     assert_eq!(n, 7);
-    // The main job (quick.toml) is the grip_half lever's recipe; only its name, its time
-    // cap and how often it redraws the curve differ.
+    // The main job (quick.toml) is the grip_half lever's recipe with 8 synergies; only
+    // that, its name, its time cap and how often it redraws the curve differ.
     let mut quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
     let half = TrainConfig::load(&dir.join("levers/grip_half.toml")).unwrap();
     assert_eq!(quick.time_budget_minutes, Some(15.0));
+    assert_eq!((quick.n_components, half.n_components), (8, 5));
+    quick.n_components = half.n_components;
     quick.name = half.name.clone();
     quick.time_budget_minutes = half.time_budget_minutes;
     quick.plot_every = half.plot_every;
