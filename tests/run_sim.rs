@@ -331,10 +331,9 @@ fn the_success_is_not_hard_wired_zero_friction_and_an_empty_grasp_fail() {
 }
 
 #[test]
-fn the_spatula_is_planned_across_its_narrow_axis_and_lifted() {
-    // The cameras' cloud of the spatula (lying flat) holds no usable antipodal pair: the
-    // plan closes across the cloud's narrow horizontal axis (the object's y axis), and
-    // the long grip policy lifts and holds it from there.
+fn the_spatula_is_planned_across_its_handle_and_lifted() {
+    // The cameras see the spatula (lying flat along x) from four sides: the plan closes
+    // across its handle (the object's y axis), and the long grip policy lifts it.
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("spatula.jsonl");
     let (ok, v, err) = run_json(&[
@@ -348,11 +347,57 @@ fn the_spatula_is_planned_across_its_narrow_axis_and_lifted() {
         log.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
+    let closing_y = v["plan"]["closing"][1].as_f64().unwrap();
+    assert!(closing_y.abs() > 0.95, "{v:#}");
+    assert_eq!(v["outcome"]["success"], true, "{v:#}");
+}
+
+#[test]
+fn a_cloud_without_an_antipodal_pair_is_grasped_across_its_narrow_axis() {
+    // The top face of a 10 x 3 cm plate, 2 cm above the table: every normal points up, so
+    // no pair of points is antipodal; the plan falls back to closing across the cloud's
+    // narrow axis (y), at its centroid.
+    let dir = tempfile::tempdir().unwrap();
+    let mut pts = Vec::new();
+    for i in 0..=20 {
+        for j in 0..=6 {
+            pts.push(format!(
+                "{} {} 0.02",
+                -0.05 + 0.005 * f64::from(i),
+                -0.015 + 0.005 * f64::from(j)
+            ));
+        }
+    }
+    let cloud = dir.path().join("plate.pcd");
+    std::fs::write(
+        &cloud,
+        format!(
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\nPOINTS {n}\nDATA ascii\n{}\n",
+            pts.join("\n"),
+            n = pts.len()
+        ),
+    )
+    .unwrap();
+    let log = dir.path().join("plate.jsonl");
+    let (ok, v, err) = run_json(&[
+        "--policy",
+        POLICY,
+        "--object",
+        "box",
+        "--cloud",
+        cloud.to_str().unwrap(),
+        "--log",
+        log.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
     assert_eq!(v["plan"]["fallback"], true, "{v:#}");
     assert!(v["plan"]["score"].is_null(), "{v:#}");
-    let closing_y = v["plan"]["closing"][1].as_f64().unwrap();
-    assert!(closing_y.abs() > 0.99, "{v:#}");
-    assert_eq!(v["outcome"]["success"], true, "{v:#}");
+    let c = &v["plan"]["closing"];
+    assert!(c[1].as_f64().unwrap() > 0.99, "{v:#}");
+    let center = &v["plan"]["center"];
+    for (k, want) in [(0, 0.0), (1, 0.0), (2, 0.02)] {
+        assert!((center[k].as_f64().unwrap() - want).abs() < 1e-6, "{v:#}");
+    }
 }
 
 #[test]

@@ -15,9 +15,13 @@ use rapier3d::parry::query::Ray;
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraConfig {
-    /// Camera positions relative to the object's centre (m). The default is two views from
-    /// opposite sides, 45 degrees above the table: a single view of a box shows no pair of
-    /// opposite faces, which the antipodal sampler needs.
+    /// Camera positions relative to the object's centre (m). The default is four views, one
+    /// from each side (+x, -x, +y, -y), 45 degrees above the table, as a wrist camera
+    /// scanning the object from around it would take: a single view of a box shows no pair
+    /// of opposite faces, which the antipodal sampler needs, and two views from +-x see the
+    /// +-y sides only at grazing angles, so that a flat or thin object lying along x (the
+    /// spatula, the wedge) offers no pair across its width (two views until 2026-12-05
+    /// evening: docs/results.md, "The planner's views").
     pub positions: Vec<[f64; 3]>,
     /// Rays per side of each camera's square grid.
     pub resolution: usize,
@@ -28,7 +32,12 @@ pub struct CameraConfig {
 impl Default for CameraConfig {
     fn default() -> Self {
         CameraConfig {
-            positions: vec![[0.35, 0.0, 0.35], [-0.35, 0.0, 0.35]],
+            positions: vec![
+                [0.35, 0.0, 0.35],
+                [-0.35, 0.0, 0.35],
+                [0.0, 0.35, 0.35],
+                [0.0, -0.35, 0.35],
+            ],
             resolution: 48,
             noise_sigma: super::partial_view::DEFAULT_NOISE_SIGMA,
         }

@@ -607,9 +607,21 @@ mod tests {
                 && (d[0] < 1e-4 || d[1] < 1e-4 || d[2].abs() < 1e-4)
         };
         assert!(c.iter().all(on_face));
-        // ... and both the +x and the -x faces are seen, the -y face (hidden) is not.
+        // ... and each of the four side faces is seen (one camera on each side), the
+        // bottom (on the table) is not.
         assert!(c.iter().any(|p| p.x > 0.0249) && c.iter().any(|p| p.x < -0.0249));
+        assert!(c.iter().any(|p| p.y > 0.0249) && c.iter().any(|p| p.y < -0.0249));
         assert!(!c
+            .iter()
+            .any(|p| p.z < 1e-4 && p.x.abs() < 0.024 && p.y.abs() < 0.024));
+        // Two views from +-x see the -y face only where it meets the others.
+        let two = CameraConfig {
+            positions: vec![[0.35, 0.0, 0.35], [-0.35, 0.0, 0.35]],
+            ..cam.clone()
+        };
+        assert!(!a
+            .camera_cloud(&two, 0)
+            .unwrap()
             .iter()
             .any(|p| p.y < -0.0249 && p.z < 0.079 && p.x.abs() < 0.024));
         assert!(a
