@@ -39,8 +39,10 @@ pub enum Backend {
   grasp run --backend sim --center 0,0,0.02 --closing 1,0,0 --calibration tactile.json
   grasp run --backend ros --ros-url ws://robot:9090 --grasp grasp.toml --calibration tactile.json
 
-With the sim backend and no grasp or cloud, the cloud is what two simulated depth
-cameras see of the object (noisy, partial); --save-cloud writes it as PCD. Without
+With the sim backend and no grasp or cloud, the cloud is what four simulated depth
+camera views (one from each side) see of the object (noisy, partial); --save-cloud
+writes it as PCD. Where the cloud holds no usable antipodal pair, the hand closes across
+the cloud's narrowest horizontal extent. Without
 --calibration the sim backend calibrates its fingertips first (as `grasp calibrate`).
 A grasp file is TOML or JSON: center = [x, y, z], closing = [x, y, z], and optionally
 approach = [x, y, z] (default [0, 0, -1]), world frame, metres. Every step is appended

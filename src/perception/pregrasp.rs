@@ -83,7 +83,7 @@ pub struct AntipodalPregrasp {
 }
 
 impl Default for AntipodalPregrasp {
-    /// `grasp run --backend sim`'s settings: two cameras, the default sampler, top-down
+    /// `grasp run --backend sim`'s settings: four camera views, the default sampler, top-down
     /// within 0.35 rad, the best 30 candidates.
     fn default() -> Self {
         AntipodalPregrasp {
