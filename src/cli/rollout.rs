@@ -84,7 +84,36 @@ pub fn threads(flag: Option<usize>) -> Result<usize> {
     grasp::util::threads::resolve(flag).map_err(|m| anyhow::anyhow!("--threads {m}"))
 }
 
+/// One episode's result: its index, its summary and its recording (with `--record`).
+type Done = (usize, EpisodeSummary, Option<RecordingEntry>);
+
 pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
+    let kind = agent_kind(&a)?;
+    let seed = g.seed.unwrap_or(0);
+    let n_threads = threads(a.threads)?.min(a.episodes);
+    let start = Instant::now();
+    let mut done = run_episodes(&a, kind, seed, n_threads)?;
+    let wall = start.elapsed().as_secs_f64();
+    done.sort_by_key(|d| d.0);
+    if let Some(dir) = &a.rec.record {
+        let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
+        let index = write_index(dir, &entries)
+            .with_context(|| format!("writing the index of {}", dir.display()))?;
+        if !g.quiet {
+            eprintln!(
+                "recorded {} episodes: open {}",
+                entries.len(),
+                index.display()
+            );
+        }
+    }
+    let all: Vec<(usize, EpisodeSummary)> = done.into_iter().map(|d| (d.0, d.1)).collect();
+    report(&a, g, seed, &all, wall, n_threads)
+}
+
+/// The agent of `--policy` (0: random, 1 and 2: the baselines), after checking the other
+/// flags.
+fn agent_kind(a: &RolloutArgs) -> Result<u8> {
     let kind = match a.policy.as_str() {
         "baseline1" => 1,
         "baseline2" => 2,
@@ -101,6 +130,13 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
             grasp::util::num::short(a.difficulty)
         );
     }
+    Ok(kind)
+}
+
+/// Runs (and with `--record`, records) every episode on `n_threads` threads. Episode i
+/// always runs the scene of seed (seed, i): outcomes do not depend on the number of
+/// threads.
+fn run_episodes(a: &RolloutArgs, kind: u8, seed: u64, n_threads: usize) -> Result<Vec<Done>> {
     let robot = Robot::builtin(Side::Left);
     let model = load_synergy(a.synergy.as_ref(), a.components)?;
     let sim_cfg = super::sim_config(a.sim_config.as_ref())?;
@@ -113,19 +149,13 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
         },
         ..EnvConfig::default()
     };
-    let seed = g.seed.unwrap_or(0);
-    let n_threads = threads(a.threads)?.min(a.episodes);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n_threads)
         .build()
         .context("building the thread pool")?;
-    let start = Instant::now();
-    // Episode i always runs the scene of seed (seed, i): outcomes do not depend on the
-    // number of threads.
     let chunks: Vec<Vec<usize>> = (0..n_threads)
         .map(|t| (t..a.episodes).step_by(n_threads).collect())
         .collect();
-    type Done = (usize, EpisodeSummary, Option<RecordingEntry>);
     let results: Vec<Vec<Done>> = pool.install(|| {
         chunks
             .par_iter()
@@ -176,22 +206,18 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
             })
             .collect::<Result<Vec<_>>>()
     })?;
-    let wall = start.elapsed().as_secs_f64();
-    let mut done: Vec<Done> = results.into_iter().flatten().collect();
-    done.sort_by_key(|d| d.0);
-    if let Some(dir) = &a.rec.record {
-        let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
-        let index = write_index(dir, &entries)
-            .with_context(|| format!("writing the index of {}", dir.display()))?;
-        if !g.quiet {
-            eprintln!(
-                "recorded {} episodes: open {}",
-                entries.len(),
-                index.display()
-            );
-        }
-    }
-    let all: Vec<(usize, EpisodeSummary)> = done.into_iter().map(|d| (d.0, d.1)).collect();
+    Ok(results.into_iter().flatten().collect())
+}
+
+/// Prints the episodes and their totals (a table, or JSON with `--json`).
+fn report(
+    a: &RolloutArgs,
+    g: &Global,
+    seed: u64,
+    all: &[(usize, EpisodeSummary)],
+    wall: f64,
+    n_threads: usize,
+) -> Result<()> {
     let n = all.len() as f64;
     let successes = all.iter().filter(|(_, r)| r.success).count();
     let failures = all.iter().filter(|(_, r)| r.physics_failure).count();
@@ -215,7 +241,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
         "{:>4}  {:<22} {:>7} {:>5} {:>8} {:>6}",
         "ep", "object", "success", "steps", "return", "lifted"
     );
-    for (i, r) in &all {
+    for (i, r) in all {
         let flag = if r.physics_failure {
             "  (physics failure)"
         } else {
