@@ -436,7 +436,8 @@ fn saved(a: &EvalArgs, file: &std::path::Path) -> Result<Vec<AgentResult>> {
 }
 
 /// Runs the evaluation the flags describe.
-fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
+/// Checks the flags that need no file: `--trials`, `--difficulty`, the recording flags.
+fn check_flags(a: &EvalArgs) -> Result<()> {
     if a.trials == 0 || a.trials > MAX_TRIALS {
         bail!(
             "--trials {} must be in 1..={MAX_TRIALS} (trials per object, each a simulated \
@@ -450,7 +451,62 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             grasp::util::num::short(a.difficulty)
         );
     }
-    a.rec.check()?;
+    a.rec.check()
+}
+
+/// Each agent's recordings are named after it (its --labels entry where given): two
+/// agents of one name would overwrite each other's files, which is an error.
+fn recording_names(
+    a: &EvalArgs,
+    agents: &[AgentEnv],
+    record: Option<&RecordOptions>,
+) -> Result<Vec<String>> {
+    let rec_names: Vec<String> = agents
+        .iter()
+        .enumerate()
+        .map(|(i, ag)| a.labels.get(i).cloned().unwrap_or_else(|| ag.spec.label()))
+        .collect();
+    if let Some(r) = record {
+        for (i, n) in rec_names.iter().enumerate() {
+            let file = agent_file_name(n);
+            if let Some(j) = (0..i).find(|&j| agent_file_name(&rec_names[j]) == file) {
+                bail!(
+                    "--record {}: agents '{}' and '{n}' would both be recorded as \
+                     '{file}_<object>_<trial>' and overwrite each other: name them apart \
+                     with --labels",
+                    r.dir.display(),
+                    rec_names[j]
+                );
+            }
+        }
+    }
+    Ok(rec_names)
+}
+
+/// A checkpoint must match the observation layout it will see (`probe`: an environment
+/// built for the agent).
+fn check_obs_layout(ag: &AgentEnv, probe: &GraspEnv) -> Result<()> {
+    let Some(dir) = ag.spec.checkpoint() else {
+        return Ok(());
+    };
+    let p = grasp::ppo::load_policy(dir)
+        .with_context(|| format!("loading checkpoint {}", dir.display()))?;
+    if p.policy.obs_dim() != probe.obs_dim() {
+        bail!(
+            "checkpoint {} expects observations of length {}, but {:?} with {} components and history {} gives {}",
+            dir.display(),
+            p.policy.obs_dim(),
+            ag.env.modality,
+            ag.model.n_components(),
+            ag.env.history,
+            probe.obs_dim()
+        );
+    }
+    Ok(())
+}
+
+fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
+    check_flags(a)?;
     let specs = a
         .policy
         .iter()
@@ -476,27 +532,7 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         only_failures: a.rec.record_failures,
         name: None,
     });
-    // Each agent's recordings are named after it (its --labels entry where given): two
-    // agents of one name would overwrite each other's files.
-    let rec_names: Vec<String> = agents
-        .iter()
-        .enumerate()
-        .map(|(i, ag)| a.labels.get(i).cloned().unwrap_or_else(|| ag.spec.label()))
-        .collect();
-    if let Some(r) = &record {
-        for (i, n) in rec_names.iter().enumerate() {
-            let file = agent_file_name(n);
-            if let Some(j) = (0..i).find(|&j| agent_file_name(&rec_names[j]) == file) {
-                bail!(
-                    "--record {}: agents '{}' and '{n}' would both be recorded as \
-                     '{file}_<object>_<trial>' and overwrite each other: name them apart \
-                     with --labels",
-                    r.dir.display(),
-                    rec_names[j]
-                );
-            }
-        }
-    }
+    let rec_names = recording_names(a, &agents, record.as_ref())?;
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?;
     let mut results = Vec::new();
@@ -522,22 +558,8 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
                 })),
             })
         };
-        // A checkpoint must match the observation layout it will see.
-        if let Some(dir) = ag.spec.checkpoint() {
-            let probe = make_env(0)?;
-            let p = grasp::ppo::load_policy(dir)
-                .with_context(|| format!("loading checkpoint {}", dir.display()))?;
-            if p.policy.obs_dim() != probe.obs_dim() {
-                bail!(
-                    "checkpoint {} expects observations of length {}, but {:?} with {} components and history {} gives {}",
-                    dir.display(),
-                    p.policy.obs_dim(),
-                    ag.env.modality,
-                    ag.model.n_components(),
-                    ag.env.history,
-                    probe.obs_dim()
-                );
-            }
+        if ag.spec.checkpoint().is_some() {
+            check_obs_layout(ag, &make_env(0)?)?;
         }
         if !g.quiet {
             eprintln!(
@@ -570,7 +592,7 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             }
             if !g.quiet {
                 eprintln!(
-                    "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no top-down candidate)"
+                    "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no plan on the cloud)"
                 );
             }
         }
