@@ -4,6 +4,7 @@
 
 use grasp::hardware::calibration::{TactileCalibration, DEFAULT_THRESHOLD_FRACTION};
 use grasp::hardware::log::{read_log, LogRecord};
+use grasp::hardware::pointcloud::{write_pcd, PcdData};
 use grasp::hardware::safety::{ClampReason, SafeHandArm, SafetyConfig};
 use grasp::hardware::torque::TorqueMapper;
 use grasp::hardware::{HandArm, HwError};
@@ -11,6 +12,7 @@ use grasp::robot::{Robot, Side};
 use grasp::run::calibrate::calibrate_tactile;
 use grasp::run::sim_backend::{SimBackendConfig, SimHandArm};
 use grasp::sim::{ObjectSpec, SimConfig};
+use nalgebra::Point3;
 use std::path::Path;
 use std::process::Command;
 use std::sync::atomic::AtomicBool;
@@ -358,26 +360,19 @@ fn a_cloud_without_an_antipodal_pair_is_grasped_across_its_narrow_axis() {
     // no pair of points is antipodal; the plan falls back to closing across the cloud's
     // narrow axis (y), at its centroid.
     let dir = tempfile::tempdir().unwrap();
-    let mut pts = Vec::new();
-    for i in 0..=20 {
-        for j in 0..=6 {
-            pts.push(format!(
-                "{} {} 0.02",
-                -0.05 + 0.005 * f64::from(i),
-                -0.015 + 0.005 * f64::from(j)
-            ));
-        }
-    }
+    let pts: Vec<Point3<f64>> = (0..=20)
+        .flat_map(|i| {
+            (0..=6).map(move |j| {
+                Point3::new(
+                    -0.05 + 0.005 * f64::from(i),
+                    -0.015 + 0.005 * f64::from(j),
+                    0.02,
+                )
+            })
+        })
+        .collect();
     let cloud = dir.path().join("plate.pcd");
-    std::fs::write(
-        &cloud,
-        format!(
-            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\nPOINTS {n}\nDATA ascii\n{}\n",
-            pts.join("\n"),
-            n = pts.len()
-        ),
-    )
-    .unwrap();
+    write_pcd(&cloud, &pts, PcdData::Ascii).unwrap();
     let log = dir.path().join("plate.jsonl");
     let (ok, v, err) = run_json(&[
         "--policy",
