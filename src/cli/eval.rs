@@ -445,12 +445,7 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
             a.trials
         );
     }
-    if !(0.0..=1.0).contains(&a.difficulty) {
-        bail!(
-            "--difficulty must be in [0, 1], got {}",
-            grasp::util::num::short(a.difficulty)
-        );
-    }
+    super::check_difficulty(a.difficulty)?;
     a.rec.check()
 }
 
@@ -483,12 +478,9 @@ fn recording_names(
     Ok(rec_names)
 }
 
-/// A checkpoint must match the observation layout it will see (`probe`: an environment
-/// built for the agent).
-fn check_obs_layout(ag: &AgentEnv, probe: &GraspEnv) -> Result<()> {
-    let Some(dir) = ag.spec.checkpoint() else {
-        return Ok(());
-    };
+/// The checkpoint in `dir` must match the observation layout it will see (`probe`: an
+/// environment built for the agent).
+fn check_obs_layout(dir: &Path, ag: &AgentEnv, probe: &GraspEnv) -> Result<()> {
     let p = grasp::ppo::load_policy(dir)
         .with_context(|| format!("loading checkpoint {}", dir.display()))?;
     if p.policy.obs_dim() != probe.obs_dim() {
@@ -558,8 +550,8 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
                 })),
             })
         };
-        if ag.spec.checkpoint().is_some() {
-            check_obs_layout(ag, &make_env(0)?)?;
+        if let Some(dir) = ag.spec.checkpoint() {
+            check_obs_layout(dir, ag, &make_env(0)?)?;
         }
         if !g.quiet {
             eprintln!(

@@ -234,6 +234,18 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+/// Checks a `--difficulty` flag (the curriculum success rate r_s that sets the start-pose
+/// range): a rate in [0, 1].
+pub fn check_difficulty(d: f64) -> anyhow::Result<()> {
+    if !(0.0..=1.0).contains(&d) {
+        anyhow::bail!(
+            "--difficulty must be in [0, 1], got {}",
+            grasp::util::num::short(d)
+        );
+    }
+    Ok(())
+}
+
 /// The simulator config of a `--sim-config`-style flag, by
 /// [`grasp::sim::SimConfig::load_or_default`]'s one rule (the built-in defaults when
 /// absent); errors name the file.

@@ -124,12 +124,7 @@ fn agent_kind(a: &RolloutArgs) -> Result<u8> {
         bail!("--episodes must be at least 1");
     }
     a.rec.check()?;
-    if !(0.0..=1.0).contains(&a.difficulty) {
-        bail!(
-            "--difficulty must be in [0, 1], got {}",
-            grasp::util::num::short(a.difficulty)
-        );
-    }
+    super::check_difficulty(a.difficulty)?;
     Ok(kind)
 }
 
