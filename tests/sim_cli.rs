@@ -294,3 +294,69 @@ fn the_antipodal_pregrasp_starts_every_agent_from_a_plan() {
         "{err}"
     );
 }
+
+#[test]
+fn a_failed_trial_is_retried_where_the_object_came_to_rest() {
+    // Baseline 1 from the pre-grasp on the torus ring, 4 trials of seed 0, with one attempt
+    // and with three. The first attempts are the one-attempt trials exactly; a trial lost
+    // there is tried again, and the JSON says how many attempts each trial took.
+    let eval = |attempts: &str| {
+        let (ok, out, err) = grasp(&[
+            "--seed",
+            "0",
+            "--json",
+            "eval",
+            "--policy",
+            "baseline1",
+            "--objects",
+            "torus_ring",
+            "--trials",
+            "4",
+            "--pregrasp",
+            "antipodal",
+            "--attempts",
+            attempts,
+        ]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        v[0].clone()
+    };
+    let once = eval("1");
+    let thrice = eval("3");
+    assert!(once.get("retries").is_none() && once["objects"][0].get("attempts").is_none());
+    let first: Vec<bool> = serde_json::from_value(once["objects"][0]["outcomes"].clone()).unwrap();
+    let won: Vec<bool> = serde_json::from_value(thrice["objects"][0]["outcomes"].clone()).unwrap();
+    let attempts: Vec<usize> =
+        serde_json::from_value(thrice["objects"][0]["attempts"].clone()).unwrap();
+    assert!(
+        first.contains(&false),
+        "a trial lost at the first attempt: {first:?}"
+    );
+    for t in 0..4 {
+        // Won at the first attempt: one attempt; lost there: retried (or said why not).
+        assert_eq!(
+            attempts[t] == 1,
+            first[t],
+            "trial {t}: {attempts:?} {first:?}"
+        );
+        assert!((1..=3).contains(&attempts[t]));
+        let said_why = !thrice["retries"]["not_retried"]
+            .as_object()
+            .unwrap()
+            .is_empty();
+        assert!(won[t] || attempts[t] == 3 || said_why, "trial {t}");
+        assert!(!first[t] || won[t]);
+    }
+    let r = &thrice["retries"];
+    assert_eq!(r["attempts"], 3);
+    assert_eq!(
+        r["first_attempt_successes"],
+        first.iter().filter(|&&w| w).count()
+    );
+    assert_eq!(r["retried"], attempts.iter().filter(|&&a| a > 1).count());
+    let (ok, _, err) = grasp(&["eval", "--policy", "baseline1", "--attempts", "0"]);
+    assert!(
+        !ok && err.contains("--attempts 0 must be in 1..=10"),
+        "{err}"
+    );
+}

@@ -12,7 +12,7 @@ use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate, markdown_table, paired_lines, paired_with_first, physics_line,
-    read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats,
+    read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, TrialPlan,
 };
 use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
@@ -37,7 +37,7 @@ pub struct EvalArgs {
     pub policy: Vec<String>,
     /// Read the results of an earlier `grasp eval --json` from this file instead of
     /// evaluating: print, compare and plot them again.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb", "attempts"])]
     pub from_json: Option<PathBuf>,
     /// Draw the per-object success of every agent (Wilson 95 % intervals, means) to this
     /// SVG file.
@@ -106,6 +106,14 @@ pub struct EvalArgs {
     /// Every agent meets the same draws, trial by trial.
     #[arg(long, value_name = "FILE")]
     pub perturb: Option<PathBuf>,
+    /// Attempts per trial (beyond the paper, whose trials lift once). After a failed lift
+    /// the hand opens where it is, the object comes to rest wherever the attempt left it
+    /// (no teleporting), and the hand is placed again as --pregrasp says, on the object as
+    /// it now lies: with `antipodal` the planner sees the new depth cloud and skips the
+    /// grasps the trial already tried. A trial succeeds when any attempt does; the JSON
+    /// gives each trial's attempts and how many trials were won at the first.
+    #[arg(long, default_value_t = 1)]
+    pub attempts: usize,
     #[command(flatten)]
     pub rec: super::RecordArgs,
 }
@@ -134,8 +142,8 @@ struct CountedPregrasp {
 }
 
 impl PregraspPlanner for CountedPregrasp {
-    fn plan(&mut self, sim: &HandSim, seed: u64) -> Option<PlannedGrasp> {
-        let p = self.inner.plan(sim, seed);
+    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
+        let p = self.inner.plan(sim, seed, avoid);
         self.counts[usize::from(p.is_none())].fetch_add(1, Ordering::Relaxed);
         p
     }
@@ -445,9 +453,19 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
             a.trials
         );
     }
+    if a.attempts == 0 || a.attempts > MAX_ATTEMPTS {
+        bail!(
+            "--attempts {} must be in 1..={MAX_ATTEMPTS} (lifts per trial; 1 is the paper's \
+             protocol)",
+            a.attempts
+        );
+    }
     super::check_difficulty(a.difficulty)?;
     a.rec.check()
 }
+
+/// Most attempts per trial `grasp eval --attempts` accepts.
+const MAX_ATTEMPTS: usize = 10;
 
 /// Each agent's recordings are named after it (its --labels entry where given): two
 /// agents of one name would overwrite each other's files, which is an error.
@@ -563,8 +581,11 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         }
         results.push(evaluate(
             &names,
-            a.trials,
-            seed,
+            &TrialPlan {
+                trials: a.trials,
+                seed,
+                attempts: a.attempts,
+            },
             n_threads,
             &make_env,
             &ag.spec,
@@ -609,7 +630,8 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
 fn print_results(a: &EvalArgs, g: &Global, results: &[AgentResult]) -> Result<()> {
     // Agents whose trials are not the same scenes are said to be so, not left out.
     let pairs = paired_lines(&paired_with_first(results)) + &unpaired_lines(results);
-    let lift_lines: String = results.iter().map(lift_line).collect();
+    let lift_lines: String = results.iter().map(lift_line).collect::<String>()
+        + &results.iter().filter_map(retry_line).collect::<String>();
     let physics_lines: String = results.iter().map(physics_line).collect();
     if g.json {
         println!("{}", serde_json::to_string_pretty(results)?);
@@ -650,6 +672,32 @@ fn print_results(a: &EvalArgs, g: &Global, results: &[AgentResult]) -> Result<()
         print!("{lift_lines}{physics_lines}{pairs}");
     }
     Ok(())
+}
+
+/// One line on how an agent's trials used their attempts (`--attempts` > 1).
+fn retry_line(r: &AgentResult) -> Option<String> {
+    let s = r.retries.as_ref()?;
+    let n: usize = r.objects.iter().map(|o| o.trials).sum();
+    let stopped: Vec<String> = s
+        .not_retried
+        .iter()
+        .map(|(k, v)| format!("{v} {}", k.replace('_', " ")))
+        .collect();
+    Some(format!(
+        "{}: {} attempts per trial: {} of {n} trials won at the first ({:.1} %), {} more on a \
+         later attempt; {} trials retried{}\n",
+        r.agent,
+        s.attempts,
+        s.first_attempt_successes,
+        100.0 * s.first_attempt_successes as f64 / n.max(1) as f64,
+        s.won_on_retry,
+        s.retried,
+        if stopped.is_empty() {
+            String::new()
+        } else {
+            format!("; not retried: {}", stopped.join(", "))
+        }
+    ))
 }
 
 /// One line on how an agent's lifts were made: thumb contact and grip.

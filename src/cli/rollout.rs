@@ -186,7 +186,7 @@ fn run_episodes(a: &RolloutArgs, kind: u8, seed: u64, n_threads: usize) -> Resul
                             if a.rec.record_failures && !rec.summary.physics_failure {
                                 return Ok((i, rec.summary, None));
                             }
-                            let entry = write_recording(dir, &rec, i).with_context(|| {
+                            let entry = write_recording(dir, &rec, i, 0).with_context(|| {
                                 format!("writing a recording into {}", dir.display())
                             })?;
                             return Ok((i, rec.summary, Some(entry)));

@@ -45,6 +45,10 @@ use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
+mod retry;
+use retry::RetryStart;
+pub use retry::{NoRetry, ON_TABLE_M, REST_SPEED, REST_SPIN, SETTLE_MAX_S, SETTLE_MIN_S};
+
 /// What happens when an episode reaches `max_steps` without a lift.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -339,6 +343,10 @@ pub struct GraspEnv {
     /// Whether every episode starts from `pregrasp`'s plan (`grasp eval --pregrasp`)
     /// rather than the share `[env.placement] antipodal` draws.
     pregrasp_always: bool,
+    /// Where the object lies for the trial's next attempt ([`GraspEnv::prepare_retry`]).
+    retry: Option<RetryStart>,
+    /// The planner's placements in the trial's attempts so far (the retry avoids them).
+    tried: Vec<PlannedGrasp>,
     done: bool,
 }
 
@@ -397,6 +405,8 @@ impl GraspEnv {
             phases: PhaseTally::default(),
             pregrasp,
             pregrasp_always: false,
+            retry: None,
+            tried: Vec::new(),
             done: true,
         })
     }
@@ -487,6 +497,68 @@ impl GraspEnv {
 
     /// [`GraspEnv::reset_scene`] with the hand in posture `start`.
     fn reset_scene_from(&mut self, seed: u64, start: [f64; 24]) -> Result<(), SimError> {
+        let (mut scene, kept) = match self.retry.take() {
+            // A retry: the same object, where the last attempt left it.
+            Some(r) => {
+                let scene = self.retry_scene(start, &r);
+                self.sim.reset_with_object_pose(&scene, &r.pose)?;
+                (scene, Some(r.pose))
+            }
+            None => {
+                self.tried.clear();
+                (self.fresh_scene(seed, start)?, None)
+            }
+        };
+        let reset = |sim: &mut HandSim, scene: &Scene| match &kept {
+            Some(pose) => sim.reset_with_object_pose(scene, pose),
+            None => sim.reset(scene),
+        };
+        let draw = self.cfg.placement.draw(seed);
+        let mut moved = false;
+        if self.pregrasp_always || draw.antipodal {
+            // No plan (or a non-finite one): the default placement stands.
+            if let Some(g) = self
+                .pregrasp
+                .as_mut()
+                .and_then(|planner| planner.plan(&self.sim, seed, &self.tried))
+                .filter(PlannedGrasp::is_finite)
+            {
+                scene.grasp_point = g.grasp_point;
+                scene.hand_yaw = g.hand_yaw;
+                self.tried.push(g);
+                moved = true;
+            }
+        }
+        if draw.shift != [0.0; 3] || draw.yaw != 0.0 {
+            let [dx, dy, dz] = draw.shift;
+            let [x, y, z] = scene.grasp_point;
+            // Lowered at most to MIN_PERTURBED_HEIGHT above the table (never below where
+            // the placement put it).
+            scene.grasp_point = [x + dx, y + dy, (z + dz).max(z.min(MIN_PERTURBED_HEIGHT))];
+            scene.hand_yaw += draw.yaw;
+            moved = true;
+        }
+        if moved {
+            reset(&mut self.sim, &scene)?;
+        }
+        for _ in 0..CLEARANCE_STEPS {
+            if !self.sim.hand_overlaps_object() {
+                break;
+            }
+            scene.grasp_point[2] += 0.005;
+            reset(&mut self.sim, &scene)?;
+        }
+        self.steps = 0;
+        self.episode_return = 0.0;
+        self.touched_in_stage1 = false;
+        self.lift_grip = None;
+        self.done = false;
+        Ok(())
+    }
+
+    /// A fresh episode's object and default placement (object choice, eq. 6's
+    /// perturbation, domain randomisation), the simulator reset to it.
+    fn fresh_scene(&mut self, seed: u64, start: [f64; 24]) -> Result<Scene, SimError> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         if let Some(next) = self.stream.as_mut().and_then(|s| s.next(&mut rng)) {
             self.objects = vec![next];
@@ -522,48 +594,9 @@ impl GraspEnv {
         scene.object_xy = [p.dx, p.dy];
         scene.object_yaw = p.dyaw + yaw;
         // The hand starts clear of the object: where the start posture would overlap a
-        // large object, the hand is raised in 5 mm steps (at most 10 cm).
+        // large object, the hand is raised in 5 mm steps (at most 10 cm; the caller).
         self.sim.reset(&scene)?;
-        let draw = self.cfg.placement.draw(seed);
-        let mut moved = false;
-        if self.pregrasp_always || draw.antipodal {
-            // No plan (or a non-finite one): the default placement stands.
-            if let Some(g) = self
-                .pregrasp
-                .as_mut()
-                .and_then(|planner| planner.plan(&self.sim, seed))
-                .filter(PlannedGrasp::is_finite)
-            {
-                scene.grasp_point = g.grasp_point;
-                scene.hand_yaw = g.hand_yaw;
-                moved = true;
-            }
-        }
-        if draw.shift != [0.0; 3] || draw.yaw != 0.0 {
-            let [dx, dy, dz] = draw.shift;
-            let [x, y, z] = scene.grasp_point;
-            // Lowered at most to MIN_PERTURBED_HEIGHT above the table (never below where
-            // the placement put it).
-            scene.grasp_point = [x + dx, y + dy, (z + dz).max(z.min(MIN_PERTURBED_HEIGHT))];
-            scene.hand_yaw += draw.yaw;
-            moved = true;
-        }
-        if moved {
-            self.sim.reset(&scene)?;
-        }
-        for _ in 0..CLEARANCE_STEPS {
-            if !self.sim.hand_overlaps_object() {
-                break;
-            }
-            scene.grasp_point[2] += 0.005;
-            self.sim.reset(&scene)?;
-        }
-        self.steps = 0;
-        self.episode_return = 0.0;
-        self.touched_in_stage1 = false;
-        self.lift_grip = None;
-        self.done = false;
-        Ok(())
+        Ok(scene)
     }
 
     /// The closing trajectory T: the number of target updates over `closing_time` and
@@ -1025,7 +1058,12 @@ mod tests {
     struct Fixed(Option<PlannedGrasp>);
 
     impl PregraspPlanner for Fixed {
-        fn plan(&mut self, _sim: &HandSim, _seed: u64) -> Option<PlannedGrasp> {
+        fn plan(
+            &mut self,
+            _sim: &HandSim,
+            _seed: u64,
+            _avoid: &[PlannedGrasp],
+        ) -> Option<PlannedGrasp> {
             self.0
         }
     }

@@ -16,11 +16,12 @@ pub mod paired;
 pub mod plot;
 pub mod record;
 pub mod regression;
+pub mod trial;
 
 pub use paired::{paired, paired_lines, paired_with_first, unpaired_lines, Paired};
 
 use crate::env::api::Action;
-use crate::env::grasp::{run_episode, Agent, EpisodeSummary, GraspEnv, GraspEnvError};
+use crate::env::grasp::{Agent, EpisodeSummary, GraspEnv, GraspEnvError};
 use crate::ppo::LoadedPolicy;
 use crate::sim::{FailureReport, PhysicsFailure};
 use candle_core::{Device, Tensor};
@@ -30,6 +31,8 @@ use record::{RecordOptions, RecordingEntry};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use trial::{run_trial, Actor, TrialOutcome};
+pub use trial::{RetryStats, TrialPlan};
 
 /// Wilson score interval for `k` successes in `n` trials at 95 % (z = 1.96): (low, high).
 /// `n = 0` gives (0, 1).
@@ -217,6 +220,10 @@ pub struct ObjectResult {
     /// The physics failures, each with its trial, kind, body pair, depth and step.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub failures: Vec<TrialFailure>,
+    /// Attempts each trial took, in trial order (`grasp eval --attempts N`, N > 1; empty
+    /// for one attempt per trial).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub attempts: Vec<usize>,
 }
 
 /// One trial's physics failure.
@@ -325,6 +332,10 @@ pub struct AgentResult {
     /// placement.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// How the trials used their attempts (`grasp eval --attempts N`, N > 1); absent for
+    /// one attempt per trial. Agents are paired only on the same attempts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub retries: Option<RetryStats>,
     /// The perturbed conditions every agent was evaluated in (`grasp eval --perturb`);
     /// absent for the default, unperturbed evaluation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -412,8 +423,14 @@ fn failure_counts(objects: &[ObjectResult]) -> (BTreeMap<String, usize>, BTreeMa
 /// One line on an agent's physics: failures by kind and body, and the deepest contacts.
 pub fn physics_line(r: &AgentResult) -> String {
     let n: usize = r.objects.iter().map(|o| o.trials).sum();
+    // With several attempts per trial a trial is several episodes: counted per trial.
+    let unit = if r.retries.is_some() {
+        "trials"
+    } else {
+        "episodes"
+    };
     let mut s = format!(
-        "{}: {} of {n} episodes ended in a physics failure",
+        "{}: {} of {n} {unit} ended in a physics failure",
         r.agent, r.physics_failures
     );
     // "name count, name count" of a tally.
@@ -437,8 +454,9 @@ pub fn physics_line(r: &AgentResult) -> String {
     }
     let c = &r.deepest_contact;
     s.push_str(&format!(
-        "; deepest object contact per episode: median {:.1} mm, 99th percentile {:.1} mm, \
+        "; deepest object contact per {}: median {:.1} mm, 99th percentile {:.1} mm, \
          max {:.1} mm, {} over 1 cm",
+        &unit[..unit.len() - 1],
         c.median * 1e3,
         c.p99 * 1e3,
         c.max * 1e3,
@@ -461,20 +479,25 @@ pub fn trial_seed(seed: u64, object: &str, trial: usize) -> u64 {
     crate::env::api::episode_seed(seed, (key ^ (key >> 64)) as u64 as usize, trial as u64)
 }
 
-/// Evaluates `agent` on every object of `make_env`'s set for `trials` trials each, in a
+/// Evaluates `agent` on every object of `make_env`'s set for `plan.trials` trials each
+/// (scenes seeded by `plan.seed`, up to `plan.attempts` attempts each: [`trial`]), in a
 /// pool of `threads` workers. `make_env(o)` builds an environment whose object set is
-/// the single object `o` (so the scene of a trial depends only on its seed), and
-/// `make_agent` builds the agent for a worker. With `record`, every episode is also
-/// written as a recording ([`record::write_recording`]); recording changes no outcome.
+/// the single object `o` (so the scene of a trial depends only on its seed). With
+/// `record`, every episode is also written as a recording ([`record::write_recording`]);
+/// recording changes no outcome.
 pub fn evaluate(
     names: &[String],
-    trials: usize,
-    seed: u64,
+    plan: &TrialPlan,
     threads: usize,
     make_env: &(dyn Fn(usize) -> Result<GraspEnv, GraspEnvError> + Sync),
     spec: &AgentSpec,
     record: Option<&RecordOptions>,
 ) -> Result<AgentResult, EvalError> {
+    let TrialPlan {
+        trials,
+        seed,
+        attempts,
+    } = *plan;
     let start = std::time::Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
@@ -485,11 +508,10 @@ pub fn evaluate(
     let rec_label = record
         .and_then(|r| r.name.clone())
         .unwrap_or_else(|| label.clone());
-    type Trial = (EpisodeSummary, Option<RecordingEntry>);
-    let per_object: Vec<Vec<Trial>> = pool.install(|| {
+    let per_object: Vec<Vec<TrialOutcome>> = pool.install(|| {
         (0..names.len())
             .into_par_iter()
-            .map(|o| -> Result<Vec<Trial>, EvalError> {
+            .map(|o| -> Result<Vec<TrialOutcome>, EvalError> {
                 let mut env = make_env(o)?;
                 let mut agent: Option<PolicyAgent> = match spec.checkpoint() {
                     Some(dir) => Some(PolicyAgent::new(
@@ -501,38 +523,17 @@ pub fn evaluate(
                     )),
                     None => None,
                 };
+                let mut actor = match (spec, agent.as_mut()) {
+                    (AgentSpec::Baseline1, _) => Actor::Baseline(false),
+                    (AgentSpec::Baseline2, _) => Actor::Baseline(true),
+                    (_, Some(a)) => Actor::Policy(a),
+                    (_, None) => unreachable!("a checkpoint agent is built above"),
+                };
                 (0..trials)
                     .map(|t| {
                         let s = trial_seed(seed, &names[o], t);
-                        let baseline = match spec {
-                            AgentSpec::Baseline1 => Some(false),
-                            AgentSpec::Baseline2 => Some(true),
-                            AgentSpec::Checkpoint(_) | AgentSpec::Sampled(_) => None,
-                        };
-                        if let Some(r) = record {
-                            let rec = match (baseline, agent.as_mut()) {
-                                (Some(stop), _) => record::record_baseline_episode(
-                                    &mut env, stop, &rec_label, s, r.every,
-                                )?,
-                                (None, Some(a)) => record::record_agent_episode(
-                                    &mut env, a, &rec_label, s, r.every,
-                                ),
-                                (None, None) => unreachable!("a checkpoint agent is built above"),
-                            };
-                            if r.only_failures && !rec.summary.physics_failure {
-                                return Ok((rec.summary, None));
-                            }
-                            let entry = record::write_recording(&r.dir, &rec, t)?;
-                            return Ok((rec.summary, Some(entry)));
-                        }
-                        Ok((
-                            match (baseline, agent.as_mut()) {
-                                (Some(stop), _) => env.run_baseline(stop, s)?,
-                                (None, Some(a)) => run_episode(&mut env, a, s),
-                                (None, None) => unreachable!("a checkpoint agent is built above"),
-                            },
-                            None,
-                        ))
+                        let rec = record.map(|r| (r, rec_label.as_str()));
+                        run_trial(&mut env, &mut actor, (s, t, attempts), rec)
                     })
                     .collect()
             })
@@ -541,10 +542,12 @@ pub fn evaluate(
     let wall_s = start.elapsed().as_secs_f64();
     let mut objects = Vec::new();
     let mut recordings = Vec::new();
-    let lifts = LiftStats::of(per_object.iter().flatten().map(|t| &t.0));
+    let lifts = LiftStats::of(per_object.iter().flatten().map(|t| &t.summary));
+    let retries = (attempts > 1)
+        .then(|| RetryStats::of(attempts, &per_object.iter().flatten().collect::<Vec<_>>()));
     let (mut k_all, mut n_all, mut steps_all) = (0, 0, 0usize);
     for (name, trials) in names.iter().zip(per_object) {
-        let eps: Vec<&EpisodeSummary> = trials.iter().map(|t| &t.0).collect();
+        let eps: Vec<&EpisodeSummary> = trials.iter().map(|t| &t.summary).collect();
         let k = eps.iter().filter(|e| e.success).count();
         let n = eps.len();
         let steps: usize = eps.iter().map(|e| e.steps).sum();
@@ -574,8 +577,13 @@ pub fn evaluate(
                     report: e.failure.clone(),
                 })
                 .collect(),
+            attempts: if attempts > 1 {
+                trials.iter().map(|t| t.attempts).collect()
+            } else {
+                Vec::new()
+            },
         });
-        recordings.extend(trials.into_iter().filter_map(|t| t.1));
+        recordings.extend(trials.into_iter().flat_map(|t| t.recordings));
     }
     let mean_rate = objects.iter().map(|o| o.rate).sum::<f64>() / objects.len().max(1) as f64;
     let physics_failures = objects.iter().map(|o| o.physics_failures).sum();
@@ -605,6 +613,7 @@ pub fn evaluate(
         wall_s,
         pregrasp: None,
         conditions: None,
+        retries,
         seed: Some(seed),
         objects,
         recordings,
@@ -897,6 +906,7 @@ mod tests {
                 deepest_contacts: vec![0.0; 10],
                 deepest_contacts_with: Vec::new(),
                 failures: Vec::new(),
+                attempts: Vec::new(),
             }],
             mean_rate: 0.8,
             ci95: wilson(8, 10),
@@ -911,6 +921,7 @@ mod tests {
             wall_s: 1.0,
             pregrasp: None,
             conditions: None,
+            retries: None,
             seed: None,
             recordings: Vec::new(),
         };
@@ -959,6 +970,7 @@ mod tests {
                         step: 140,
                     }),
                 }],
+                attempts: Vec::new(),
             }],
             mean_rate: 0.75,
             ci95: wilson(3, 4),
@@ -973,6 +985,7 @@ mod tests {
             wall_s: 1.0,
             pregrasp: None,
             conditions: None,
+            retries: None,
             seed: None,
             recordings: Vec::new(),
         };

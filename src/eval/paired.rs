@@ -82,6 +82,14 @@ pub fn unpaired_reason(a: &AgentResult, b: &AgentResult) -> Option<String> {
             c(b)
         ));
     }
+    let attempts = |r: &AgentResult| r.retries.as_ref().map_or(1, |s| s.attempts);
+    if attempts(a) != attempts(b) {
+        return Some(format!(
+            "they had different attempts per trial ({} and {}, `grasp eval --attempts`)",
+            attempts(a),
+            attempts(b)
+        ));
+    }
     if a.seed != b.seed {
         let s = |r: &AgentResult| r.seed.map_or("not recorded".to_string(), |v| v.to_string());
         return Some(format!(
@@ -228,6 +236,7 @@ mod tests {
                     deepest_contacts: vec![0.0; o.len()],
                     deepest_contacts_with: Vec::new(),
                     failures: Vec::new(),
+                    attempts: Vec::new(),
                 }
             })
             .collect();
@@ -247,6 +256,7 @@ mod tests {
             wall_s: 1.0,
             pregrasp: None,
             conditions: None,
+            retries: None,
             seed: None,
             recordings: Vec::new(),
         }

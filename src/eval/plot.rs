@@ -320,6 +320,7 @@ mod tests {
                 deepest_contacts: vec![0.0; trials],
                 deepest_contacts_with: Vec::new(),
                 failures: Vec::new(),
+                attempts: Vec::new(),
             })
             .collect();
         let k: usize = objects.iter().map(|o| o.successes).sum();
@@ -340,6 +341,7 @@ mod tests {
             wall_s: 1.0,
             pregrasp: None,
             conditions: None,
+            retries: None,
             seed: None,
             recordings: Vec::new(),
         }

@@ -363,6 +363,8 @@ pub struct RecordingEntry {
     pub object: String,
     /// Trial (or episode) index.
     pub trial: usize,
+    /// The trial's attempt (1 = its first; later ones with `grasp eval --attempts`).
+    pub attempt: usize,
     /// Scene seed.
     pub seed: u64,
     /// Outcome.
@@ -409,22 +411,27 @@ pub fn agent_file_name(agent: &str) -> String {
 
 /// Writes `rec` as `<stem>.json` and `<stem>.html` into `dir` (atomically, the folder
 /// created when missing), where the stem is `<agent>_<object>_<trial>` made file-safe,
-/// the agent as [`agent_file_name`] gives it.
+/// the agent as [`agent_file_name`] gives it, and `_attempt<k>` added for a trial's
+/// attempt `k` after its first (`attempt` counts from 0).
 pub fn write_recording(
     dir: &Path,
     rec: &EpisodeRecording,
     trial: usize,
+    attempt: usize,
 ) -> Result<RecordingEntry, RecordError> {
     std::fs::create_dir_all(dir).map_err(|source| RecordError::Dir {
         path: dir.to_path_buf(),
         source,
     })?;
-    let stem = format!(
+    let mut stem = format!(
         "{}_{}_{:03}",
         agent_file_name(&rec.agent),
         slug(&rec.object),
         trial
     );
+    if attempt > 0 {
+        stem.push_str(&format!("_attempt{}", attempt + 1));
+    }
     let json = format!("{stem}.json");
     let html = format!("{stem}.html");
     write_atomic(&dir.join(&json), serde_json::to_string(rec)?.as_bytes())?;
@@ -433,6 +440,7 @@ pub fn write_recording(
         agent: rec.agent.clone(),
         object: rec.object.clone(),
         trial,
+        attempt: attempt + 1,
         seed: rec.seed,
         success: rec.summary.success,
         outcome: outcome_text(&rec.summary),
@@ -458,7 +466,11 @@ pub fn index_html(entries: &[RecordingEntry]) -> String {
              <td>{}</td><td><a href=\"{}\">replay</a> <a href=\"{}\">json</a></td></tr>\n",
             html_escape(&e.agent),
             html_escape(&e.object),
-            e.trial,
+            if e.attempt > 1 {
+                format!("{} (attempt {})", e.trial, e.attempt)
+            } else {
+                e.trial.to_string()
+            },
             e.seed,
             if e.success { "ok" } else { "no" },
             html_escape(&e.outcome),
@@ -589,7 +601,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let mut e = env();
         let rec = record_baseline_episode(&mut e, false, "Baseline 1", 3, 8).unwrap();
-        let entry = write_recording(dir.path(), &rec, 2).unwrap();
+        let entry = write_recording(dir.path(), &rec, 2, 0).unwrap();
         assert_eq!(entry.json, "Baseline_1_box_002.json");
         let v: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.path().join(&entry.json)).unwrap()).unwrap();

@@ -11,7 +11,7 @@
 //! than the dev profile `.ci/run` uses (32 against 22.5 steps/s on the reference machine),
 //! so across profiles only the counts are compared.
 
-use super::{evaluate, AgentSpec, EvalError};
+use super::{evaluate, AgentSpec, EvalError, TrialPlan};
 use crate::env::api::{Env, VecEnv};
 use crate::env::bench::{random_agent, Until};
 use crate::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
@@ -240,8 +240,7 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
         };
         let r = evaluate(
             &names,
-            setup.trials,
-            setup.seed,
+            &TrialPlan::once(setup.trials, setup.seed),
             setup.threads,
             &make_env,
             &spec,

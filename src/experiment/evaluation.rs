@@ -24,7 +24,7 @@ use crate::env::curriculum::CurriculumConfig;
 use crate::env::grasp::{EnvConfig, GraspEnv};
 use crate::eval::conditions::EvalConditions;
 use crate::eval::paired::{mcnemar_exact, p_text};
-use crate::eval::{evaluate, wilson, AgentSpec};
+use crate::eval::{evaluate, wilson, AgentSpec, TrialPlan};
 use crate::perception::pregrasp::AntipodalPregrasp;
 use crate::robot::{Robot, Side};
 use crate::sim::SimConfig;
@@ -286,8 +286,7 @@ pub fn evaluate_runs(
             ));
             let res = evaluate(
                 &names,
-                e.trials,
-                seed,
+                &TrialPlan::once(e.trials, seed),
                 threads,
                 &make_env,
                 &AgentSpec::learned(ck.clone(), e.stochastic),

@@ -37,14 +37,33 @@ impl PlannedGrasp {
     pub fn is_finite(&self) -> bool {
         self.grasp_point.iter().all(|v| v.is_finite()) && self.hand_yaw.is_finite()
     }
+
+    /// Whether `other` is the same grasp for a retry's purpose: grasp points within
+    /// [`SAME_GRASP_M`] and closing lines within [`SAME_GRASP_RAD`] of each other (a line:
+    /// the hand turned by half a turn closes along the same one).
+    pub fn same_as(&self, other: &PlannedGrasp) -> bool {
+        let d2: f64 = (0..3)
+            .map(|k| (self.grasp_point[k] - other.grasp_point[k]).powi(2))
+            .sum();
+        let turn = (self.hand_yaw - other.hand_yaw).rem_euclid(std::f64::consts::PI);
+        d2.sqrt() < SAME_GRASP_M && turn.min(std::f64::consts::PI - turn) < SAME_GRASP_RAD
+    }
 }
+
+/// Grasp points closer than this (m) are one grasp ([`PlannedGrasp::same_as`]).
+pub const SAME_GRASP_M: f64 = 0.01;
+
+/// Closing lines closer than this (rad) are one grasp ([`PlannedGrasp::same_as`]).
+pub const SAME_GRASP_RAD: f64 = 0.35;
 
 /// Plans the hand's start for an episode from the simulator with the object placed.
 pub trait PregraspPlanner: Send {
     /// The placement for the episode of `seed` (the same seed gives the same plan, so
     /// every agent starts a trial from the same pose), or `None` when the planner finds
-    /// none (the episode then starts from the default placement).
-    fn plan(&mut self, sim: &HandSim, seed: u64) -> Option<PlannedGrasp>;
+    /// none (the episode then starts from the default placement). A retry passes the
+    /// grasps its trial already tried in `avoid`: none of them is planned again
+    /// ([`PlannedGrasp::same_as`]), the next best is.
+    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp>;
 }
 
 /// Largest tilt of a candidate's approach from straight down that a top-down grasp
@@ -96,7 +115,7 @@ impl Default for AntipodalPregrasp {
 }
 
 impl PregraspPlanner for AntipodalPregrasp {
-    fn plan(&mut self, sim: &HandSim, seed: u64) -> Option<PlannedGrasp> {
+    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
         let cloud = camera_cloud(sim, &self.cameras, seed).ok()?;
         let cfg = AntipodalConfig {
             seed,
@@ -105,15 +124,17 @@ impl PregraspPlanner for AntipodalPregrasp {
         // No usable antipodal pair (or too few points for the normals): across the
         // cloud's narrowest horizontal extent instead.
         let candidates = grasp_candidates(&cloud, &cfg).unwrap_or_default();
+        let planned = |g: TwoFingerGrasp| PlannedGrasp {
+            grasp_point: g.center.into(),
+            hand_yaw: g.closing.y.atan2(g.closing.x),
+        };
+        let new = |p: &PlannedGrasp| !avoid.iter().any(|a| a.same_as(p));
         candidates
             .iter()
             .take(self.max_candidates)
-            .find_map(|c| snap_top_down(&c.grasp, self.max_tilt_rad))
-            .or_else(|| principal_axis_grasp(&cloud))
-            .map(|g| PlannedGrasp {
-                grasp_point: g.center.into(),
-                hand_yaw: g.closing.y.atan2(g.closing.x),
-            })
+            .filter_map(|c| snap_top_down(&c.grasp, self.max_tilt_rad).map(planned))
+            .find(new)
+            .or_else(|| principal_axis_grasp(&cloud).map(planned).filter(new))
     }
 }
 
@@ -156,8 +177,8 @@ mod tests {
         scene.object_yaw = 0.4;
         sim.reset(&scene).unwrap();
         let mut planner = AntipodalPregrasp::default();
-        let a = planner.plan(&sim, 7).expect("a plan on a box");
-        let b = planner.plan(&sim, 7).expect("a plan on a box");
+        let a = planner.plan(&sim, 7, &[]).expect("a plan on a box");
+        let b = planner.plan(&sim, 7, &[]).expect("a plan on a box");
         assert_eq!(a, b, "the same seed gives the same plan");
         let (s, c) = (0.4f64.sin(), 0.4f64.cos());
         let across = (a.hand_yaw.cos() * -s + a.hand_yaw.sin() * c).abs();
@@ -171,6 +192,33 @@ mod tests {
         let (xb, yb) = (c * x + s * y, -s * x + c * y);
         assert!(xb.abs() < 0.08 && yb.abs() < 0.015, "({xb}, {yb})");
         assert!(z > 0.0 && z < 0.06, "{z}");
+        // A retry avoiding this grasp gets another one: elsewhere along the box or
+        // across it at another angle.
+        let c = planner.plan(&sim, 7, &[a]).expect("a second plan");
+        assert!(!c.same_as(&a), "{c:?} against {a:?}");
+        let d = planner.plan(&sim, 7, &[a, c]).expect("a third plan");
+        assert!(!d.same_as(&a) && !d.same_as(&c));
+    }
+
+    #[test]
+    fn same_grasp_hand_computed() {
+        let g = PlannedGrasp {
+            grasp_point: [0.0, 0.0, 0.05],
+            hand_yaw: 0.1,
+        };
+        let at = |dx: f64, yaw: f64| PlannedGrasp {
+            grasp_point: [dx, 0.0, 0.05],
+            hand_yaw: yaw,
+        };
+        // 9 mm away, 0.3 rad turned: the same; 11 mm or 0.4 rad: another grasp.
+        assert!(g.same_as(&at(0.009, 0.4)));
+        assert!(!g.same_as(&at(0.011, 0.1)));
+        assert!(!g.same_as(&at(0.0, 0.5)));
+        // Half a turn closes along the same line (thumb and fingers swapped): the same;
+        // a quarter turn is across it.
+        assert!(g.same_as(&at(0.0, 0.1 + std::f64::consts::PI)));
+        assert!(g.same_as(&at(0.0, 0.1 - std::f64::consts::PI + 0.2)));
+        assert!(!g.same_as(&at(0.0, 0.1 + std::f64::consts::FRAC_PI_2)));
     }
 
     #[test]
@@ -214,7 +262,7 @@ mod tests {
                 cameras,
                 ..AntipodalPregrasp::default()
             };
-            let g = planner.plan(&sim, 5).expect("a plan on the spatula");
+            let g = planner.plan(&sim, 5, &[]).expect("a plan on the spatula");
             let across = (g.hand_yaw - 0.3 - std::f64::consts::FRAC_PI_2).sin().abs();
             assert!(across < 0.25f64.sin(), "hand yaw {}", g.hand_yaw);
             let [x, y, z] = g.grasp_point;

@@ -609,6 +609,33 @@ impl HandSim {
     /// start posture (clamped to limits; coupled J1 = J2 = their mean), targets = start,
     /// object resting on the table, lift at 0.
     pub fn reset(&mut self, scene: &Scene) -> Result<(), SimError> {
+        self.reset_object_at(scene, None)
+    }
+
+    /// [`HandSim::reset`] with the object at `pose` instead of resting upright at the
+    /// scene's `object_xy` and `object_yaw`: where an earlier attempt left it at rest (a
+    /// retry after a failed lift; the scene's object fields are not used). The object
+    /// starts still, as it lay.
+    pub fn reset_with_object_pose(
+        &mut self,
+        scene: &Scene,
+        pose: &Isometry3<f64>,
+    ) -> Result<(), SimError> {
+        let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+            && pose.rotation.coords.iter().all(|v| v.is_finite());
+        if !finite {
+            return Err(SimError::NonFiniteScene {
+                what: "object pose",
+            });
+        }
+        self.reset_object_at(scene, Some(pose))
+    }
+
+    fn reset_object_at(
+        &mut self,
+        scene: &Scene,
+        object_pose: Option<&Isometry3<f64>>,
+    ) -> Result<(), SimError> {
         scene.check()?;
         let start = self.clamp_targets(&scene.start);
         let gp = Point3::from(scene.grasp_point);
@@ -645,16 +672,18 @@ impl HandSim {
         mb.forward_kinematics(&self.sets.bodies, false);
         mb.update_rigid_bodies(&mut self.sets.bodies, true);
         // Object.
-        let rot = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), scene.object_yaw);
-        let obj_pose = Isometry3::from_parts(
-            Vector3::new(
-                scene.object_xy[0],
-                scene.object_xy[1],
-                self.object.rest_height(),
+        let obj_pose = object_pose.copied().unwrap_or_else(|| {
+            let rot = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), scene.object_yaw);
+            Isometry3::from_parts(
+                Vector3::new(
+                    scene.object_xy[0],
+                    scene.object_xy[1],
+                    self.object.rest_height(),
+                )
+                .into(),
+                rot,
             )
-            .into(),
-            rot,
-        );
+        });
         self.object_start = obj_pose.translation.vector;
         if let Some(rb) = self.sets.bodies.get_mut(self.object_body) {
             rb.set_position(pose_f32(&obj_pose), true);
@@ -1094,17 +1123,42 @@ impl HandSim {
     /// compound's own bounding box is its body-frame box turned with the object, which
     /// lies below the object (under the table) once it is tilted.
     pub fn object_lowest_z(&self) -> f64 {
-        let Some(c) = self.sets.colliders.get(self.object_collider) else {
-            return f64::NAN;
-        };
-        match c.shape().as_compound() {
+        self.object_aabb().map_or(f64::NAN, |(lo, _)| lo.z)
+    }
+
+    /// The object's world bounding box (m): lowest and highest corners. For a compound
+    /// object, the union of its convex parts' boxes in the world frame (tight when it is
+    /// tilted, unlike the compound's own box; see [`HandSim::object_lowest_z`]).
+    pub fn object_aabb(&self) -> Option<(Point3<f64>, Point3<f64>)> {
+        let c = self.sets.colliders.get(self.object_collider)?;
+        let aabb = match c.shape().as_compound() {
             Some(compound) => compound
                 .shapes()
                 .iter()
-                .map(|(part_pose, part)| part.compute_aabb(&(c.position() * part_pose)).mins.z)
-                .fold(f32::INFINITY, f32::min) as f64,
-            None => c.compute_aabb().mins.z as f64,
-        }
+                .map(|(part_pose, part)| part.compute_aabb(&(c.position() * part_pose)))
+                .reduce(|a, b| a.merged(&b))?,
+            None => c.compute_aabb(),
+        };
+        let p = |v: Vector| Point3::new(v.x as f64, v.y as f64, v.z as f64);
+        Some((p(aabb.mins), p(aabb.maxs)))
+    }
+
+    /// The object's pose (m, unit quaternion) in f64.
+    pub fn object_pose(&self) -> Option<Isometry3<f64>> {
+        self.sets
+            .bodies
+            .get(self.object_body)
+            .map(|rb| pose_f64(rb.position()))
+    }
+
+    /// The object's linear (m/s) and angular (rad/s) speed.
+    pub fn object_speed(&self) -> (f64, f64) {
+        self.sets
+            .bodies
+            .get(self.object_body)
+            .map_or((f64::NAN, f64::NAN), |rb| {
+                (vec_f64(rb.linvel()).norm(), vec_f64(rb.angvel()).norm())
+            })
     }
 
     /// The lift coordinate (m above its start).

@@ -1,0 +1,230 @@
+//! A second attempt after a failed lift (beyond the paper; `grasp eval --attempts`).
+//!
+//! On the robot a failed grasp is not the end of the object: the hand opens, the object
+//! settles wherever the attempt left it, the camera sees it there and the planner chooses
+//! a grasp again. [`GraspEnv::prepare_retry`] does the same in the simulator, with no
+//! teleporting: the open hand stays where the lift left it while the physics runs until
+//! the object lies still on the table, clear of the hand; the next reset then rebuilds the
+//! world with the object exactly at that pose, still, and places the hand as any episode's
+//! placement does (the planner on the new depth cloud, skipping the grasps this trial has
+//! already tried, or top-down over the object's centre as it now lies).
+
+use super::GraspEnv;
+use crate::perception::pregrasp::PlannedGrasp;
+use crate::sim::Scene;
+use nalgebra::{Isometry3, Point3};
+use std::time::Instant;
+
+/// Longest wait for the object to come to rest after a failed attempt (s).
+pub const SETTLE_MAX_S: f64 = 2.0;
+
+/// Shortest wait (s): the fingers open before the object is judged at rest.
+pub const SETTLE_MIN_S: f64 = 0.25;
+
+/// The object is at rest below this linear speed (m/s) ...
+pub const REST_SPEED: f64 = 0.005;
+
+/// ... and this angular speed (rad/s).
+pub const REST_SPIN: f64 = 0.05;
+
+/// The object lies on the table when its lowest point is within this of the table top (m).
+pub const ON_TABLE_M: f64 = 0.01;
+
+/// Why a trial gets no further attempt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, thiserror::Error)]
+pub enum NoRetry {
+    /// No attempt has ended yet.
+    #[error("no attempt to retry")]
+    NoAttempt,
+    /// The attempt succeeded.
+    #[error("the attempt succeeded")]
+    Succeeded,
+    /// The attempt, or the wait after it, ended in a physics failure.
+    #[error("a physics failure")]
+    PhysicsFailure,
+    /// The object still moved, or still touched the hand, after [`SETTLE_MAX_S`].
+    #[error("the object did not come to rest clear of the hand")]
+    NotAtRest,
+    /// The object came to rest off the table top.
+    #[error("the object left the table")]
+    OffTable,
+}
+
+impl NoRetry {
+    /// The reason's name in reports (snake case).
+    pub fn name(self) -> &'static str {
+        match self {
+            NoRetry::NoAttempt => "no_attempt",
+            NoRetry::Succeeded => "succeeded",
+            NoRetry::PhysicsFailure => "physics_failure",
+            NoRetry::NotAtRest => "not_at_rest",
+            NoRetry::OffTable => "off_table",
+        }
+    }
+}
+
+/// Where the object lay when the trial was retried.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct RetryStart {
+    /// The object's pose at rest.
+    pub pose: Isometry3<f64>,
+    /// Its world bounding box then: lowest and highest corners.
+    pub aabb: (Point3<f64>, Point3<f64>),
+}
+
+impl GraspEnv {
+    /// Prepares the trial's next attempt after a failed one: opens the hand to the start
+    /// posture where the attempt left it and runs the physics (at least [`SETTLE_MIN_S`],
+    /// at most [`SETTLE_MAX_S`]) until the object is at rest and clear of the hand. The
+    /// next reset (any seed) then keeps this object at that pose, plans the hand's
+    /// placement on it again and avoids the grasps the trial already tried. An error says
+    /// why there is no next attempt (the environment is then left as it was after the
+    /// wait; the next reset starts a fresh scene).
+    pub fn prepare_retry(&mut self) -> Result<(), NoRetry> {
+        self.retry = None;
+        let last = self.last.as_ref().ok_or(NoRetry::NoAttempt)?;
+        if last.success {
+            return Err(NoRetry::Succeeded);
+        }
+        if last.physics_failure || self.sim.failure().is_some() {
+            return Err(NoRetry::PhysicsFailure);
+        }
+        let (t, before) = (Instant::now(), self.sim.physics_steps());
+        let settled = self.settle();
+        self.phases.reset.add(self.sim.physics_steps() - before, t);
+        settled?;
+        let (pose, aabb) = self
+            .sim
+            .object_pose()
+            .zip(self.sim.object_aabb())
+            .ok_or(NoRetry::PhysicsFailure)?;
+        if aabb.0.z < -ON_TABLE_M || aabb.0.z > ON_TABLE_M {
+            return Err(NoRetry::OffTable);
+        }
+        self.retry = Some(RetryStart { pose, aabb });
+        Ok(())
+    }
+
+    /// Opens the hand and waits for the object to rest clear of it.
+    fn settle(&mut self) -> Result<(), NoRetry> {
+        let dt = self.sim.config().dt;
+        let (min, max) = (
+            (SETTLE_MIN_S / dt).round() as usize,
+            (SETTLE_MAX_S / dt).round() as usize,
+        );
+        self.sim
+            .set_targets(&self.start)
+            .map_err(|_| NoRetry::PhysicsFailure)?;
+        for k in 0..max {
+            if !self.sim.step_physics() {
+                return Err(NoRetry::PhysicsFailure);
+            }
+            if k + 1 >= min {
+                let (v, w) = self.sim.object_speed();
+                if v < REST_SPEED && w < REST_SPIN && self.sim.hand_object_force() == 0.0 {
+                    return Ok(());
+                }
+            }
+        }
+        Err(NoRetry::NotAtRest)
+    }
+
+    /// The scene of a retry: the default placement top-down over the centre of the
+    /// object's bounding box as it lies, `grasp_depth` below its top but never below its
+    /// centre (as [`Scene::top_down`] for an object at rest upright).
+    pub(super) fn retry_scene(&self, start: [f64; 24], r: &RetryStart) -> Scene {
+        let (lo, hi) = r.aabb;
+        let c = nalgebra::center(&lo, &hi);
+        Scene {
+            start,
+            object_xy: [r.pose.translation.x, r.pose.translation.y],
+            object_yaw: 0.0,
+            grasp_point: [c.x, c.y, (hi.z - self.cfg.grasp_depth).max(c.z)],
+            hand_yaw: 0.0,
+        }
+    }
+
+    /// The placements the planner chose in this trial's attempts so far.
+    pub fn tried_grasps(&self) -> &[PlannedGrasp] {
+        &self.tried
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::env::api::{Action, Env};
+    use crate::env::grasp::{run_episode, Agent, EnvConfig};
+    use crate::robot::{Robot, Side};
+    use crate::sim::{ObjectSpec, SimConfig};
+
+    /// Lifts at once, fingers as stage 1 left them.
+    struct LiftNow(usize);
+
+    impl Agent for LiftNow {
+        fn reset(&mut self) {}
+        fn act(&mut self, _obs: &[f32]) -> Action {
+            Action {
+                cont: vec![0.0; self.0],
+                lift: true,
+            }
+        }
+    }
+
+    fn env(object: ObjectSpec) -> GraspEnv {
+        GraspEnv::new(
+            &Robot::builtin(Side::Left),
+            vec![("box".to_string(), object)],
+            crate::synergy::default_model(),
+            SimConfig::default(),
+            EnvConfig::default(),
+        )
+        .expect("env")
+    }
+
+    #[test]
+    fn a_failed_lift_is_retried_from_where_the_object_came_to_rest() {
+        // A slippery 6 cm box (friction 0.05, 0.5 kg) slides out of a hand that lifts at
+        // once: the attempt fails and the box comes to rest on the table. The retry's
+        // scene holds the box at exactly that pose, still, the hand top-down over its
+        // centre and clear of it.
+        let mut e = env(ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.05));
+        assert_eq!(e.prepare_retry(), Err(NoRetry::NoAttempt));
+        let n = e.action_spec().continuous;
+        let first = run_episode(&mut e, &mut LiftNow(n), 11);
+        assert!(!first.success && !first.physics_failure, "{first:?}");
+        e.prepare_retry().expect("a retry");
+        let rest = e.sim.object_pose().expect("pose");
+        let (v, w) = e.sim.object_speed();
+        assert!(v < REST_SPEED && w < REST_SPIN, "{v} {w}");
+        assert_eq!(e.sim.hand_object_force(), 0.0);
+        e.reset_scene(99).expect("retry scene");
+        let now = e.sim.object_pose().expect("pose");
+        assert!(
+            (now.translation.vector - rest.translation.vector).norm() < 1e-6,
+            "{now} against {rest}"
+        );
+        assert!(now.rotation.angle_to(&rest.rotation) < 1e-5);
+        assert_eq!(e.sim.object_speed(), (0.0, 0.0));
+        assert!(!e.sim.hand_overlaps_object());
+        let palm = |e: &GraspEnv| e.sim.critic_geometry().expect("geometry").palm;
+        let retried = palm(&e).translation.vector.xy() - rest.translation.vector.xy();
+        // The next reset without a retry is a fresh scene (the box upright where the
+        // scene puts it), the palm where it is over a box's centre at the same yaw.
+        e.reset_scene(99).expect("fresh scene");
+        assert!(e.sim.object_tilt() < 1e-6 && e.sim.object_speed() == (0.0, 0.0));
+        let fresh = palm(&e).translation.vector.xy() - e.sim.object_position().xy();
+        assert!(
+            (retried - fresh).norm() < 0.005,
+            "palm {retried} from the resting box's centre, {fresh} over a fresh one"
+        );
+    }
+
+    #[test]
+    fn a_won_trial_is_not_retried() {
+        // Baseline 1's power grasp holds the default box.
+        let mut e = env(ObjectSpec::default_box());
+        assert!(e.run_baseline(false, 0).expect("baseline").success);
+        assert_eq!(e.prepare_retry(), Err(NoRetry::Succeeded));
+    }
+}
