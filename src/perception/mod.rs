@@ -7,11 +7,13 @@
 //! It reads the simulator (to cast the cameras' rays) and the robot's grasp geometry, and
 //! nothing above them.
 //!
-//! - [`pointcloud`]: PCD/PLY readers, a PCD writer, normals, antipodal candidates.
+//! - [`pointcloud`]: PCD/PLY readers, a PCD writer.
+//! - [`antipodal`]: normals, antipodal two-finger candidates, the narrow-axis fallback.
 //! - [`partial_view`]: synthetic surface samples and partial-view clouds with noise.
 //! - [`camera`]: the simulated depth cameras ([`camera::camera_cloud`]).
 //! - [`pregrasp`]: the planner interface and the antipodal planner on the simulated cloud.
 
+pub mod antipodal;
 pub mod camera;
 pub mod partial_view;
 pub mod pointcloud;
