@@ -104,7 +104,8 @@ pub enum Command {
     Eval(eval::EvalArgs),
     /// Train a policy with PPO from a config file into a run folder.
     Train(train::TrainArgs),
-    /// Run one grasp attempt of a policy on the simulated or the real robot (Sec. V-B).
+    /// Run a grasp attempt of a policy on the simulated or the real robot (Sec. V-B); with
+    /// --attempts, more after a failed lift (sim backend).
     Run(run::RunArgs),
     /// Calibrate the fingertip tactile sensors (Sec. V-C) and save the calibration.
     Calibrate(calibrate::CalibrateArgs),

@@ -1,4 +1,4 @@
-//! `grasp run`: one grasp attempt of a trained policy on the simulated or the real robot
+//! `grasp run`: a grasp attempt of a trained policy on the simulated or the real robot
 //! (Sec. V-B): plan a two-finger grasp, map it to the hand, stage 1, the policy, the lift.
 
 use anyhow::{bail, Context, Result};
@@ -11,8 +11,8 @@ use grasp::hardware::HandArm;
 use grasp::robot::{Robot, Side};
 use grasp::run::calibrate::{calibrate_tactile, CalibrationReport};
 use grasp::run::pipeline::{
-    load_grasp_file, plan_grasp, run_attempt, GraspFile, GraspPlan, GraspSource, PipelineConfig,
-    PolicyRunner,
+    load_grasp_file, plan_grasp_avoiding, run_attempt, AttemptOutcome, GraspFile, GraspPlan,
+    GraspSource, PipelineConfig, PolicyRunner,
 };
 use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
 use grasp::sim::{ObjectSpec, SimConfig};
@@ -31,7 +31,8 @@ pub enum Backend {
     Ros,
 }
 
-/// Run one grasp attempt of a trained policy on the simulated or the real robot.
+/// Run a grasp attempt of a trained policy on the simulated or the real robot (with
+/// --attempts, more after a failed lift: sim backend).
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   grasp run --backend sim --object box_gelatin
@@ -109,7 +110,15 @@ pub struct RunArgs {
     /// rosbridge websocket of the robot (ros backend).
     #[arg(long, default_value = "ws://localhost:9090")]
     pub ros_url: String,
+    /// Attempts (sim backend, planned on the cameras' cloud): after a failed lift the hand
+    /// opens, the object settles where the attempt left it, the cameras look again and
+    /// the next best grasp that was not tried yet is planned, as `grasp eval --attempts`.
+    #[arg(long, default_value_t = 1)]
+    pub attempts: usize,
 }
+
+/// Most attempts `grasp run --attempts` accepts.
+const MAX_ATTEMPTS: usize = 10;
 
 /// The object for the sim backend: `box`, `cylinder` or one library object.
 pub fn sim_object(name: &str) -> Result<ObjectSpec> {
@@ -227,6 +236,12 @@ fn save_cloud(path: &Path, source: &GraspSource) -> Result<()> {
 }
 
 pub fn run(a: RunArgs, g: &Global) -> Result<()> {
+    if a.attempts == 0 || a.attempts > MAX_ATTEMPTS {
+        bail!(
+            "--attempts {} must be in 1..={MAX_ATTEMPTS} (grasp attempts on the object)",
+            a.attempts
+        );
+    }
     let seed = g.seed.unwrap_or(0);
     let robot = Robot::builtin(Side::Left);
     let mut policy = PolicyRunner::load(&a.policy)
@@ -248,30 +263,57 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
                     true,
                 ),
             };
-            let source = match source {
+            if a.attempts > 1 && source.is_some() {
+                bail!(
+                    "--attempts {} plans each attempt on the simulated cameras' cloud: drop \
+                     --grasp, --cloud and --center",
+                    a.attempts
+                );
+            }
+            let cameras = CameraConfig::default();
+            let mut source = match source {
                 Some(s) => s,
                 None => GraspSource::Cloud(
-                    arm.camera_cloud(&CameraConfig::default(), seed)
+                    arm.camera_cloud(&cameras, seed)
                         .context("simulating the depth cameras")?,
                 ),
             };
             if let Some(p) = &a.save_cloud {
                 save_cloud(p, &source)?;
             }
-            let plan = plan(&robot, &source, &cfg, &policy, seed)?;
-            policy.set_object_cloud(object_cloud(&source));
-            attempt(
-                arm,
-                &robot,
-                &plan,
-                &mut policy,
-                &calibration,
-                &cfg,
-                &a,
-                g,
-                calibrated_now,
-            )?;
-            Ok(())
+            let mut arm = safe_arm(arm, &robot, &cfg)?;
+            let mut log = AttemptLog::open(&a.log)?;
+            let mut tried: Vec<GraspPlan> = Vec::new();
+            let mut reports = Vec::new();
+            for k in 0..a.attempts {
+                if k > 0 {
+                    if let Err(e) = arm.backend_mut().settle_for_retry() {
+                        if !g.quiet {
+                            eprintln!("no attempt {}: {e}", k + 1);
+                        }
+                        break;
+                    }
+                    let s = grasp::eval::trial::attempt_seed(seed, k);
+                    let cloud = arm.backend().camera_cloud(&cameras, s);
+                    source = GraspSource::Cloud(cloud.context("simulating the depth cameras")?);
+                }
+                let plan = plan(&robot, &source, &cfg, &policy, seed, &tried)?;
+                policy.set_object_cloud(object_cloud(&source));
+                let at = Attempt {
+                    plan: &plan,
+                    calibration: &calibration,
+                    cfg: &cfg,
+                    calibrated_now,
+                    number: (a.attempts > 1).then_some(k + 1),
+                };
+                let (out, report) = attempt(&mut arm, &robot, &at, &mut policy, &mut log, &a, g)?;
+                reports.push(report);
+                tried.push(plan);
+                if out.success {
+                    break;
+                }
+            }
+            print_reports(reports, g)
         }
         Backend::Ros => {
             if !cfg!(feature = "ros") {
@@ -286,23 +328,29 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
             if let Some(p) = &a.save_cloud {
                 save_cloud(p, &source)?;
             }
+            if a.attempts > 1 {
+                bail!(
+                    "--attempts {}: the ros backend makes one attempt (a retry needs a new \
+                     cloud of where the object lies)",
+                    a.attempts
+                );
+            }
             let cfg = pipeline_config(&a, None)?;
-            let plan = plan(&robot, &source, &cfg, &policy, seed)?;
+            let plan = plan(&robot, &source, &cfg, &policy, seed, &[])?;
             policy.set_object_cloud(object_cloud(&source));
             #[cfg(feature = "ros")]
             {
-                let arm = connect_ros(&a.ros_url)?;
-                attempt(
-                    arm,
-                    &robot,
-                    &plan,
-                    &mut policy,
-                    &calibration,
-                    &cfg,
-                    &a,
-                    g,
-                    false,
-                )?;
+                let mut arm = safe_arm(connect_ros(&a.ros_url)?, &robot, &cfg)?;
+                let mut log = AttemptLog::open(&a.log)?;
+                let at = Attempt {
+                    plan: &plan,
+                    calibration: &calibration,
+                    cfg: &cfg,
+                    calibrated_now: false,
+                    number: None,
+                };
+                let (_, report) = attempt(&mut arm, &robot, &at, &mut policy, &mut log, &a, g)?;
+                print_reports(vec![report], g)?;
             }
             #[cfg(not(feature = "ros"))]
             let _ = (plan, calibration);
@@ -326,46 +374,61 @@ fn plan(
     cfg: &PipelineConfig,
     policy: &PolicyRunner,
     seed: u64,
+    tried: &[GraspPlan],
 ) -> Result<GraspPlan> {
     let mut cfg = cfg.clone();
     cfg.antipodal.seed = seed;
     let preshape = cfg.preshape_angles(policy.env_config())?;
-    plan_grasp(robot, source, &preshape, &cfg).context("planning the grasp")
+    plan_grasp_avoiding(robot, source, &preshape, &cfg, tried).context("planning the grasp")
 }
 
-#[allow(clippy::too_many_arguments)]
-fn attempt<B: HandArm>(
-    backend: B,
-    robot: &Robot,
-    plan: &GraspPlan,
-    policy: &mut PolicyRunner,
-    calibration: &TactileCalibration,
-    cfg: &PipelineConfig,
-    a: &RunArgs,
-    g: &Global,
-    calibrated_now: bool,
-) -> Result<bool> {
-    let mut arm = SafeHandArm::new(
+/// `backend` behind the safety layer: joint limits, rate limits, the sensor watchdog.
+fn safe_arm<B: HandArm>(backend: B, robot: &Robot, cfg: &PipelineConfig) -> Result<SafeHandArm<B>> {
+    Ok(SafeHandArm::new(
         backend,
         robot.hand_limits(),
         cfg.safety,
         Arc::new(AtomicBool::new(false)),
-    )?;
-    let mut log = AttemptLog::open(&a.log)?;
-    let out = run_attempt(&mut arm, robot, plan, policy, calibration, cfg, &mut log)
+    )?)
+}
+
+/// One attempt's plan and settings.
+struct Attempt<'a> {
+    plan: &'a GraspPlan,
+    calibration: &'a TactileCalibration,
+    cfg: &'a PipelineConfig,
+    calibrated_now: bool,
+    /// The attempt's number when `--attempts` allows more than one.
+    number: Option<usize>,
+}
+
+/// Runs one attempt, prints its text report (unless `--json`) and returns its outcome with
+/// its JSON report.
+fn attempt<B: HandArm>(
+    arm: &mut SafeHandArm<B>,
+    robot: &Robot,
+    at: &Attempt,
+    policy: &mut PolicyRunner,
+    log: &mut AttemptLog,
+    a: &RunArgs,
+    g: &Global,
+) -> Result<(AttemptOutcome, serde_json::Value)> {
+    let plan = at.plan;
+    let out = run_attempt(arm, robot, plan, policy, at.calibration, at.cfg, log)
         .context("grasp attempt failed")?;
-    if g.json {
-        let j = serde_json::json!({
-            "backend": format!("{:?}", a.backend).to_lowercase(),
-            "policy": a.policy,
-            "object": (a.backend == Backend::Sim).then_some(&a.object),
-            "calibrated_now": calibrated_now,
-            "plan": plan,
-            "outcome": out,
-            "log": a.log,
-        });
-        println!("{}", serde_json::to_string_pretty(&j)?);
-    } else {
+    let report = serde_json::json!({
+        "backend": format!("{:?}", a.backend).to_lowercase(),
+        "policy": a.policy,
+        "object": (a.backend == Backend::Sim).then_some(&a.object),
+        "calibrated_now": at.calibrated_now,
+        "plan": plan,
+        "outcome": out,
+        "log": a.log,
+    });
+    if !g.json {
+        if let Some(n) = at.number {
+            println!("attempt {n}:");
+        }
         let where_ = if a.backend == Backend::Sim {
             format!(" on {}", a.object)
         } else {
@@ -404,7 +467,7 @@ fn attempt<B: HandArm>(
             if out.success { "SUCCESS" } else { "FAILURE" },
             where_,
             out.reason,
-            if calibrated_now {
+            if at.calibrated_now {
                 "calibrated now"
             } else {
                 "calibration file"
@@ -415,5 +478,23 @@ fn attempt<B: HandArm>(
             a.log.display()
         );
     }
-    Ok(out.success)
+    Ok((out, report))
+}
+
+/// With `--json`: one attempt's report as it is, several as `{"attempts": [...],
+/// "success": ...}`.
+fn print_reports(mut reports: Vec<serde_json::Value>, g: &Global) -> Result<()> {
+    if !g.json {
+        return Ok(());
+    }
+    let j = if reports.len() == 1 {
+        reports.remove(0)
+    } else {
+        let success = reports
+            .last()
+            .is_some_and(|r| r["outcome"]["success"] == serde_json::Value::Bool(true));
+        serde_json::json!({ "attempts": reports, "success": success })
+    };
+    println!("{}", serde_json::to_string_pretty(&j)?);
+    Ok(())
 }

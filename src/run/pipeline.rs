@@ -42,7 +42,9 @@ use crate::hardware::pointcloud::{grasp_candidates, principal_axis_grasp, Antipo
 use crate::hardware::safety::{SafeHandArm, SafetyConfig};
 use crate::hardware::torque::{TorqueMapper, REAL_THRESHOLDS};
 use crate::hardware::{ArmMotion, HandArm, RawSensors, N_HAND_JOINTS, N_TENDONS};
-use crate::perception::pregrasp::{snap_top_down, DEFAULT_MAX_CANDIDATES, DEFAULT_MAX_TILT_RAD};
+use crate::perception::pregrasp::{
+    snap_top_down, PlannedGrasp, DEFAULT_MAX_CANDIDATES, DEFAULT_MAX_TILT_RAD,
+};
 use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
 use crate::robot::{ur10e, Posture, Robot};
 use crate::sim::script;
@@ -376,6 +378,31 @@ pub fn plan_grasp(
     preshape: &[f64; N_HAND_JOINTS],
     cfg: &PipelineConfig,
 ) -> Result<GraspPlan, RunError> {
+    plan_grasp_avoiding(robot, source, preshape, cfg, &[])
+}
+
+/// Whether cloud grasp `g` is one of `tried` (a retry plans another): the same grasp
+/// point and closing line as [`PlannedGrasp::same_as`] judges them.
+fn already_tried(g: &TwoFingerGrasp, tried: &[GraspPlan]) -> bool {
+    let planned = |center: Point3<f64>, closing: Vector3<f64>| PlannedGrasp {
+        grasp_point: center.into(),
+        hand_yaw: closing.y.atan2(closing.x),
+    };
+    let p = planned(g.center, g.closing);
+    tried
+        .iter()
+        .any(|t| planned(Point3::from(t.center), Vector3::from(t.closing)).same_as(&p))
+}
+
+/// [`plan_grasp`] for a retry: on a cloud, the best reachable candidate that is none of
+/// the grasps already `tried` (a given grasp is planned as it is).
+pub fn plan_grasp_avoiding(
+    robot: &Robot,
+    source: &GraspSource,
+    preshape: &[f64; N_HAND_JOINTS],
+    cfg: &PipelineConfig,
+    tried: &[GraspPlan],
+) -> Result<GraspPlan, RunError> {
     cfg.validate()?;
     let preshape = *preshape;
     let make = |g: &TwoFingerGrasp, score, candidates, skipped, q: ([f64; 6], [f64; 6])| {
@@ -426,6 +453,10 @@ pub fn plan_grasp(
                 } else {
                     c.grasp
                 };
+                if already_tried(&g, tried) {
+                    skipped += 1;
+                    continue;
+                }
                 match solve_arm(robot, &preshape, &g, cfg) {
                     Ok(q) => return Ok(make(&g, Some(c.score), cands.len(), skipped, q)),
                     Err(e) => {
@@ -436,7 +467,7 @@ pub fn plan_grasp(
             }
             // No usable candidate: across the cloud's narrowest horizontal extent, as the
             // pre-grasp planner of evaluation and training does.
-            if let Some(g) = principal_axis_grasp(points) {
+            if let Some(g) = principal_axis_grasp(points).filter(|g| !already_tried(g, tried)) {
                 match solve_arm(robot, &preshape, &g, cfg) {
                     Ok(q) => return Ok(make(&g, None, cands.len(), skipped, q)),
                     Err(e) => {

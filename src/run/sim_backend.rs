@@ -190,6 +190,9 @@ pub struct SimHandArm {
     stops: Vec<f64>,
     lift: Option<LiftOutcome>,
     guard_raise: f64,
+    /// The object's pose kept through arm moves ([`SimHandArm::settle_for_retry`]); until
+    /// then every placement puts it at rest at `cfg.object_xy`, `cfg.object_yaw`.
+    kept_object: Option<Isometry3<f64>>,
 }
 
 fn sim_err(e: crate::sim::SimError) -> HwError {
@@ -235,6 +238,7 @@ impl SimHandArm {
             stops: Vec::new(),
             lift: None,
             guard_raise: 0.0,
+            kept_object: None,
             cfg,
         };
         let [x, y] = arm.cfg.object_xy;
@@ -247,6 +251,56 @@ impl SimHandArm {
         };
         arm.place(scene)?;
         Ok(arm)
+    }
+
+    /// Prepares a second attempt after a failed one, as `grasp eval --attempts` does
+    /// ([`crate::env::grasp::GraspEnv::prepare_retry`]): opens the hand where the attempt
+    /// left it and runs the physics (0.25-2 s) until the object lies still on the table,
+    /// clear of the hand. From then on, moving the arm keeps the object where it lies
+    /// instead of placing it at its configured start. An error says why there is no retry.
+    pub fn settle_for_retry(&mut self) -> Result<(), HwError> {
+        use crate::env::grasp::{ON_TABLE_M, REST_SPEED, REST_SPIN, SETTLE_MAX_S, SETTLE_MIN_S};
+        let refuse = |detail: &str| HwError::InvalidCommand {
+            field: "retry".into(),
+            detail: detail.into(),
+        };
+        self.sim
+            .set_targets(&Posture::Open.angles())
+            .map_err(sim_err)?;
+        let dt = self.sim.config().dt;
+        let (min, max) = (
+            (SETTLE_MIN_S / dt).round() as usize,
+            (SETTLE_MAX_S / dt).round() as usize,
+        );
+        let mut settled = false;
+        for k in 0..max {
+            if !self.sim.step_physics() {
+                return Err(HwError::Disconnected(format!(
+                    "the simulated physics failed while the object settled: {:?}",
+                    self.sim.failure()
+                )));
+            }
+            let (v, w) = self.sim.object_speed();
+            if k + 1 >= min
+                && v < REST_SPEED
+                && w < REST_SPIN
+                && self.sim.hand_object_force() == 0.0
+            {
+                settled = true;
+                break;
+            }
+        }
+        if !settled {
+            return Err(refuse(
+                "the object did not come to rest clear of the hand within 2 s",
+            ));
+        }
+        let lowest = self.sim.object_lowest_z();
+        if lowest.abs() > ON_TABLE_M {
+            return Err(refuse("the object left the table"));
+        }
+        self.kept_object = self.sim.object_pose();
+        Ok(())
     }
 
     /// The simulator (read-only).
@@ -317,7 +371,11 @@ impl SimHandArm {
         self.clock_base += self.sim.time();
         let mut raised = 0.0;
         loop {
-            self.sim.reset(&scene).map_err(sim_err)?;
+            match &self.kept_object {
+                Some(pose) => self.sim.reset_with_object_pose(&scene, pose),
+                None => self.sim.reset(&scene),
+            }
+            .map_err(sim_err)?;
             if !self.sim.hand_overlaps_object() {
                 break;
             }
