@@ -453,19 +453,10 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
             a.trials
         );
     }
-    if a.attempts == 0 || a.attempts > MAX_ATTEMPTS {
-        bail!(
-            "--attempts {} must be in 1..={MAX_ATTEMPTS} (lifts per trial; 1 is the paper's \
-             protocol)",
-            a.attempts
-        );
-    }
+    super::check_attempts(a.attempts, "lifts per trial; 1 is the paper's protocol")?;
     super::check_difficulty(a.difficulty)?;
     a.rec.check()
 }
-
-/// Most attempts per trial `grasp eval --attempts` accepts.
-const MAX_ATTEMPTS: usize = 10;
 
 /// Each agent's recordings are named after it (its --labels entry where given): two
 /// agents of one name would overwrite each other's files, which is an error.

@@ -247,6 +247,17 @@ pub fn check_difficulty(d: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Most attempts `--attempts` accepts (`grasp eval`, `grasp run`).
+pub const MAX_ATTEMPTS: usize = 10;
+
+/// Checks an `--attempts` flag: 1..=[`MAX_ATTEMPTS`]; `what` says what one attempt is.
+pub fn check_attempts(n: usize, what: &str) -> anyhow::Result<()> {
+    if n == 0 || n > MAX_ATTEMPTS {
+        anyhow::bail!("--attempts {n} must be in 1..={MAX_ATTEMPTS} ({what})");
+    }
+    Ok(())
+}
+
 /// The simulator config of a `--sim-config`-style flag, by
 /// [`grasp::sim::SimConfig::load_or_default`]'s one rule (the built-in defaults when
 /// absent); errors name the file.

@@ -117,9 +117,6 @@ pub struct RunArgs {
     pub attempts: usize,
 }
 
-/// Most attempts `grasp run --attempts` accepts.
-const MAX_ATTEMPTS: usize = 10;
-
 /// The object for the sim backend: `box`, `cylinder` or one library object.
 pub fn sim_object(name: &str) -> Result<ObjectSpec> {
     match name.trim() {
@@ -236,12 +233,7 @@ fn save_cloud(path: &Path, source: &GraspSource) -> Result<()> {
 }
 
 pub fn run(a: RunArgs, g: &Global) -> Result<()> {
-    if a.attempts == 0 || a.attempts > MAX_ATTEMPTS {
-        bail!(
-            "--attempts {} must be in 1..={MAX_ATTEMPTS} (grasp attempts on the object)",
-            a.attempts
-        );
-    }
+    super::check_attempts(a.attempts, "grasp attempts on the object")?;
     let seed = g.seed.unwrap_or(0);
     let robot = Robot::builtin(Side::Left);
     let mut policy = PolicyRunner::load(&a.policy)

@@ -46,8 +46,8 @@ use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 mod retry;
+pub use retry::NoRetry;
 use retry::RetryStart;
-pub use retry::{NoRetry, ON_TABLE_M, REST_SPEED, REST_SPIN, SETTLE_MAX_S, SETTLE_MIN_S};
 
 /// What happens when an episode reaches `max_steps` without a lift.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]

@@ -48,6 +48,7 @@ use crate::hardware::{
 };
 use crate::robot::grasp_map::hand_grasp_frame;
 use crate::robot::{ur10e, Posture, Robot};
+use crate::sim::settle::Unsettled;
 use crate::sim::{HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig};
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::SeedableRng;
@@ -255,49 +256,24 @@ impl SimHandArm {
 
     /// Prepares a second attempt after a failed one, as `grasp eval --attempts` does
     /// ([`crate::env::grasp::GraspEnv::prepare_retry`]): opens the hand where the attempt
-    /// left it and runs the physics (0.25-2 s) until the object lies still on the table,
-    /// clear of the hand. From then on, moving the arm keeps the object where it lies
-    /// instead of placing it at its configured start. An error says why there is no retry.
+    /// left it and lets the object settle on the table ([`HandSim::settle_object`]). From
+    /// then on, moving the arm keeps the object where it lies instead of placing it at its
+    /// configured start. An error says why there is no retry.
     pub fn settle_for_retry(&mut self) -> Result<(), HwError> {
-        use crate::env::grasp::{ON_TABLE_M, REST_SPEED, REST_SPIN, SETTLE_MAX_S, SETTLE_MIN_S};
-        let refuse = |detail: &str| HwError::InvalidCommand {
-            field: "retry".into(),
-            detail: detail.into(),
-        };
-        self.sim
-            .set_targets(&Posture::Open.angles())
-            .map_err(sim_err)?;
-        let dt = self.sim.config().dt;
-        let (min, max) = (
-            (SETTLE_MIN_S / dt).round() as usize,
-            (SETTLE_MAX_S / dt).round() as usize,
-        );
-        let mut settled = false;
-        for k in 0..max {
-            if !self.sim.step_physics() {
+        match self.sim.settle_object(&Posture::Open.angles()) {
+            Ok(()) => {}
+            Err(Unsettled::PhysicsFailure) => {
                 return Err(HwError::Disconnected(format!(
                     "the simulated physics failed while the object settled: {:?}",
                     self.sim.failure()
-                )));
+                )))
             }
-            let (v, w) = self.sim.object_speed();
-            if k + 1 >= min
-                && v < REST_SPEED
-                && w < REST_SPIN
-                && self.sim.hand_object_force() == 0.0
-            {
-                settled = true;
-                break;
+            Err(e) => {
+                return Err(HwError::InvalidCommand {
+                    field: "retry".into(),
+                    detail: e.to_string(),
+                })
             }
-        }
-        if !settled {
-            return Err(refuse(
-                "the object did not come to rest clear of the hand within 2 s",
-            ));
-        }
-        let lowest = self.sim.object_lowest_z();
-        if lowest.abs() > ON_TABLE_M {
-            return Err(refuse("the object left the table"));
         }
         self.kept_object = self.sim.object_pose();
         Ok(())

@@ -45,6 +45,7 @@ pub mod object;
 pub mod placement;
 pub mod script;
 pub mod sensors;
+pub mod settle;
 pub mod world;
 
 pub use config::SimConfig;

@@ -10,25 +10,10 @@
 //! already tried, or top-down over the object's centre as it now lies).
 
 use super::GraspEnv;
-use crate::perception::pregrasp::PlannedGrasp;
+use crate::sim::settle::Unsettled;
 use crate::sim::Scene;
 use nalgebra::{Isometry3, Point3};
 use std::time::Instant;
-
-/// Longest wait for the object to come to rest after a failed attempt (s).
-pub const SETTLE_MAX_S: f64 = 2.0;
-
-/// Shortest wait (s): the fingers open before the object is judged at rest.
-pub const SETTLE_MIN_S: f64 = 0.25;
-
-/// The object is at rest below this linear speed (m/s) ...
-pub const REST_SPEED: f64 = 0.005;
-
-/// ... and this angular speed (rad/s).
-pub const REST_SPIN: f64 = 0.05;
-
-/// The object lies on the table when its lowest point is within this of the table top (m).
-pub const ON_TABLE_M: f64 = 0.01;
 
 /// Why a trial gets no further attempt.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, thiserror::Error)]
@@ -42,7 +27,8 @@ pub enum NoRetry {
     /// The attempt, or the wait after it, ended in a physics failure.
     #[error("a physics failure")]
     PhysicsFailure,
-    /// The object still moved, or still touched the hand, after [`SETTLE_MAX_S`].
+    /// The object still moved, or still touched the hand, after
+    /// [`crate::sim::settle::SETTLE_MAX_S`].
     #[error("the object did not come to rest clear of the hand")]
     NotAtRest,
     /// The object came to rest off the table top.
@@ -74,8 +60,8 @@ pub(super) struct RetryStart {
 
 impl GraspEnv {
     /// Prepares the trial's next attempt after a failed one: opens the hand to the start
-    /// posture where the attempt left it and runs the physics (at least [`SETTLE_MIN_S`],
-    /// at most [`SETTLE_MAX_S`]) until the object is at rest and clear of the hand. The
+    /// posture where the attempt left it and lets the object settle on the table
+    /// ([`crate::sim::HandSim::settle_object`]). The
     /// next reset (any seed) then keeps this object at that pose, plans the hand's
     /// placement on it again and avoids the grasps the trial already tried. An error says
     /// why there is no next attempt (the environment is then left as it was after the
@@ -90,43 +76,20 @@ impl GraspEnv {
             return Err(NoRetry::PhysicsFailure);
         }
         let (t, before) = (Instant::now(), self.sim.physics_steps());
-        let settled = self.settle();
+        let settled = self.sim.settle_object(&self.start);
         self.phases.reset.add(self.sim.physics_steps() - before, t);
-        settled?;
+        settled.map_err(|e| match e {
+            Unsettled::PhysicsFailure => NoRetry::PhysicsFailure,
+            Unsettled::NotAtRest => NoRetry::NotAtRest,
+            Unsettled::OffTable => NoRetry::OffTable,
+        })?;
         let (pose, aabb) = self
             .sim
             .object_pose()
             .zip(self.sim.object_aabb())
             .ok_or(NoRetry::PhysicsFailure)?;
-        if aabb.0.z < -ON_TABLE_M || aabb.0.z > ON_TABLE_M {
-            return Err(NoRetry::OffTable);
-        }
         self.retry = Some(RetryStart { pose, aabb });
         Ok(())
-    }
-
-    /// Opens the hand and waits for the object to rest clear of it.
-    fn settle(&mut self) -> Result<(), NoRetry> {
-        let dt = self.sim.config().dt;
-        let (min, max) = (
-            (SETTLE_MIN_S / dt).round() as usize,
-            (SETTLE_MAX_S / dt).round() as usize,
-        );
-        self.sim
-            .set_targets(&self.start)
-            .map_err(|_| NoRetry::PhysicsFailure)?;
-        for k in 0..max {
-            if !self.sim.step_physics() {
-                return Err(NoRetry::PhysicsFailure);
-            }
-            if k + 1 >= min {
-                let (v, w) = self.sim.object_speed();
-                if v < REST_SPEED && w < REST_SPIN && self.sim.hand_object_force() == 0.0 {
-                    return Ok(());
-                }
-            }
-        }
-        Err(NoRetry::NotAtRest)
     }
 
     /// The scene of a retry: the default placement top-down over the centre of the
@@ -143,11 +106,6 @@ impl GraspEnv {
             hand_yaw: 0.0,
         }
     }
-
-    /// The placements the planner chose in this trial's attempts so far.
-    pub fn tried_grasps(&self) -> &[PlannedGrasp] {
-        &self.tried
-    }
 }
 
 #[cfg(test)]
@@ -156,6 +114,7 @@ mod tests {
     use crate::env::api::{Action, Env};
     use crate::env::grasp::{run_episode, Agent, EnvConfig};
     use crate::robot::{Robot, Side};
+    use crate::sim::settle::{REST_SPEED, REST_SPIN};
     use crate::sim::{ObjectSpec, SimConfig};
 
     /// Lifts at once, fingers as stage 1 left them.
