@@ -296,6 +296,89 @@ fn the_antipodal_pregrasp_starts_every_agent_from_a_plan() {
 }
 
 #[test]
+fn a_critic_ranks_the_planners_placements_for_every_agent() {
+    // The 8-synergy policy's critic chooses among the planner's 4 best placements on the
+    // sugar box, for itself and for baseline 1 alike: both agents' episodes start from the
+    // same placements, so their tallies of the places chosen are the same, one plan per
+    // trial.
+    let policy = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/policies/fig5_gru_m3_pca8"
+    );
+    let agents = format!("{policy},baseline1");
+    let (ok, out, err) = grasp(&[
+        "--seed",
+        "0",
+        "--json",
+        "eval",
+        "--policy",
+        &agents,
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "3",
+        "--pregrasp",
+        "antipodal",
+        "--rank-top",
+        "4",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("among the planner's top 4: chosen by place"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let ranked: Vec<serde_json::Value> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["pregrasp"]["ranked"].clone())
+        .collect();
+    assert_eq!(ranked[0], ranked[1], "the same placements for every agent");
+    assert_eq!(ranked[0]["top"], 4);
+    assert_eq!(ranked[0]["ranker"], policy);
+    let chosen: Vec<usize> = serde_json::from_value(ranked[0]["chosen"].clone()).unwrap();
+    assert_eq!(chosen.len(), 4);
+    assert_eq!(chosen.iter().sum::<usize>(), 3, "{chosen:?}");
+    // Bad requests are refused before anything runs.
+    for (args, says) in [
+        (&["--rank-top", "3"][..], "needs --pregrasp antipodal"),
+        (
+            &["--pregrasp", "antipodal", "--rank-top", "11"][..],
+            "must be in 1..=10",
+        ),
+        (
+            &["--pregrasp", "antipodal", "--rank-top", "0"][..],
+            "must be in 1..=10",
+        ),
+        (
+            &["--pregrasp", "antipodal", "--ranker", policy][..],
+            "only with --rank-top 2 or more",
+        ),
+        (
+            &[
+                "--pregrasp",
+                "antipodal",
+                "--rank-top",
+                "2",
+                "--ranker",
+                "assets",
+            ][..],
+            "not a checkpoint folder",
+        ),
+        (
+            &["--pregrasp", "antipodal", "--rank-top", "2"][..],
+            "needs a critic to rank with",
+        ),
+    ] {
+        let mut all = vec!["eval", "--policy", "baseline1", "--objects", "box_sugar"];
+        all.extend_from_slice(args);
+        let (ok, _, err) = grasp(&all);
+        assert!(!ok && err.contains(says), "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn a_failed_trial_is_retried_where_the_object_came_to_rest() {
     // Baseline 1 from the pre-grasp on the torus ring, 4 trials of seed 0, with one attempt
     // and with three. The first attempts are the one-attempt trials exactly; a trial lost

@@ -9,10 +9,12 @@ use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
 use grasp::eval::conditions::EvalConditions;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
+use grasp::eval::rank::MAX_RANK_TOP;
 use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate, markdown_table, paired_lines, paired_with_first, physics_line,
-    read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, TrialPlan,
+    read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats, RankedPregrasp,
+    TrialPlan,
 };
 use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
@@ -37,7 +39,7 @@ pub struct EvalArgs {
     pub policy: Vec<String>,
     /// Read the results of an earlier `grasp eval --json` from this file instead of
     /// evaluating: print, compare and plot them again.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb", "attempts"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb", "attempts", "rank_top", "ranker"])]
     pub from_json: Option<PathBuf>,
     /// Draw the per-object success of every agent (Wilson 95 % intervals, means) to this
     /// SVG file.
@@ -114,6 +116,18 @@ pub struct EvalArgs {
     /// gives each trial's attempts and how many trials were won at the first.
     #[arg(long, default_value_t = 1)]
     pub attempts: usize,
+    /// With `--pregrasp antipodal` (beyond the paper): compare the planner's K best
+    /// distinct placements and start from the one a trained critic values most: for each,
+    /// stage 1 closes the hand there in a probe simulation and the critic of --ranker
+    /// values the first observation (joint angles, touch, torque levels). One ranker
+    /// places every agent, so all agents still start each trial from the same pose. 1:
+    /// the planner's best (its geometric score).
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub rank_top: usize,
+    /// The checkpoint whose critic ranks the placements (--rank-top above 1); by default
+    /// the first checkpoint of --policy.
+    #[arg(long, value_name = "CHECKPOINT")]
+    pub ranker: Option<PathBuf>,
     #[command(flatten)]
     pub rec: super::RecordArgs,
 }
@@ -134,10 +148,11 @@ fn placement_name(p: Placement) -> String {
         .map_or_else(|| format!("{p:?}"), |v| v.get_name().to_string())
 }
 
-/// The antipodal planner, counting the episodes it placed and those it left at the
-/// default placement (shared by one agent's workers).
+/// The antipodal planner (or a critic's ranking of its top placements), counting the
+/// episodes it placed and those it left at the default placement (shared by one agent's
+/// workers).
 struct CountedPregrasp {
-    inner: AntipodalPregrasp,
+    inner: Box<dyn PregraspPlanner>,
     counts: Arc<[AtomicUsize; 2]>,
 }
 
@@ -454,6 +469,34 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
         );
     }
     super::check_attempts(a.attempts, "lifts per trial; 1 is the paper's protocol")?;
+    if a.rank_top == 0 || a.rank_top > MAX_RANK_TOP {
+        bail!(
+            "--rank-top {} must be in 1..={MAX_RANK_TOP} (the planner's best placements a \
+             critic compares; 1: the planner's best)",
+            a.rank_top
+        );
+    }
+    if a.rank_top > 1 && a.pregrasp != Placement::Antipodal {
+        bail!(
+            "--rank-top {} ranks the planner's placements: it needs --pregrasp antipodal",
+            a.rank_top
+        );
+    }
+    if let Some(r) = &a.ranker {
+        if a.rank_top < 2 {
+            bail!(
+                "--ranker {} ranks placements only with --rank-top 2 or more",
+                r.display()
+            );
+        }
+        if !r.join(grasp::ppo::CHECKPOINT_FILE).is_file() {
+            bail!(
+                "--ranker {}: not a checkpoint folder (no {})",
+                r.display(),
+                grasp::ppo::CHECKPOINT_FILE
+            );
+        }
+    }
     super::check_difficulty(a.difficulty)?;
     a.rec.check()
 }
@@ -506,6 +549,53 @@ fn check_obs_layout(dir: &Path, ag: &AgentEnv, probe: &GraspEnv) -> Result<()> {
     Ok(())
 }
 
+/// The critic that ranks the planner's placements (`--rank-top` above 1): its
+/// checkpoint, network and setup.
+struct Ranker {
+    dir: PathBuf,
+    critic: Arc<grasp::ppo::LoadedPolicy>,
+    env: AgentEnv,
+}
+
+/// The ranker `a` asks for: `--ranker`, else the first checkpoint of `--policy`, in its
+/// own setup (perturbed as the agents are); `None` with `--rank-top 1`.
+fn ranker(
+    a: &EvalArgs,
+    agents: &[AgentEnv],
+    conditions: Option<&EvalConditions>,
+    g: &Global,
+) -> Result<Option<Ranker>> {
+    if a.rank_top < 2 {
+        return Ok(None);
+    }
+    let dir = match &a.ranker {
+        Some(d) => d.clone(),
+        None => agents
+            .iter()
+            .find_map(|ag| ag.spec.checkpoint().map(Path::to_path_buf))
+            .with_context(|| {
+                format!(
+                    "--rank-top {} needs a critic to rank with: give --ranker CHECKPOINT or a \
+                     checkpoint in --policy",
+                    a.rank_top
+                )
+            })?,
+    };
+    let mut env = agent_envs(a, vec![AgentSpec::learned(dir.clone(), false)], g)?
+        .pop()
+        .context("the ranker's setup")?;
+    if let Some(c) = conditions {
+        c.apply(&mut env.env);
+    }
+    let critic = grasp::ppo::load_policy(&dir)
+        .with_context(|| format!("loading the ranker {}", dir.display()))?;
+    Ok(Some(Ranker {
+        dir,
+        critic: Arc::new(critic),
+        env,
+    }))
+}
+
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     check_flags(a)?;
     let specs = a
@@ -527,6 +617,17 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         }
     }
     let sim_cfg = eval_sim_config(a.sim_config.as_ref(), &agents, g)?;
+    let ranker = ranker(a, &agents, conditions.as_ref(), g)?;
+    if let Some(r) = &ranker {
+        let probe = GraspEnv::new(
+            &robot,
+            vec![objects[0].clone()],
+            r.env.model.clone(),
+            sim_cfg.clone(),
+            r.env.env.clone(),
+        )?;
+        check_obs_layout(&r.dir, &r.env, &probe)?;
+    }
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
         every: a.rec.record_every,
@@ -543,18 +644,36 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             ..r.clone()
         });
         let counts: Arc<[AtomicUsize; 2]> = Arc::new(Default::default());
+        let chosen = RankedPregrasp::tally(a.rank_top);
         let make_env = |o: usize| {
+            let object = vec![objects[o].clone()];
             let env = GraspEnv::new(
                 &robot,
-                vec![objects[o].clone()],
+                object.clone(),
                 ag.model.clone(),
                 sim_cfg.clone(),
                 ag.env.clone(),
             )?;
+            let inner: Box<dyn PregraspPlanner> = match &ranker {
+                None => Box::new(AntipodalPregrasp::default()),
+                Some(r) => Box::new(RankedPregrasp::new(
+                    AntipodalPregrasp::default(),
+                    a.rank_top,
+                    GraspEnv::new(
+                        &robot,
+                        object,
+                        r.env.model.clone(),
+                        sim_cfg.clone(),
+                        r.env.env.clone(),
+                    )?,
+                    r.critic.clone(),
+                    chosen.clone(),
+                )),
+            };
             Ok::<_, GraspEnvError>(match a.pregrasp {
                 Placement::TopDown => env,
                 Placement::Antipodal => env.with_pregrasp(Box::new(CountedPregrasp {
-                    inner: AntipodalPregrasp::default(),
+                    inner,
                     counts: counts.clone(),
                 })),
             })
@@ -592,12 +711,26 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
                     placement: placement_name(a.pregrasp),
                     planned,
                     default_placement: fallback,
+                    ranked: ranker.as_ref().map(|rk| RankStats {
+                        top: a.rank_top,
+                        ranker: rk.dir.display().to_string(),
+                        chosen: chosen.iter().map(|n| n.load(Ordering::Relaxed)).collect(),
+                    }),
                 });
             }
             if !g.quiet {
                 eprintln!(
                     "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no plan on the cloud)"
                 );
+                if let Some(rk) = results
+                    .last()
+                    .and_then(|r| r.pregrasp.as_ref()?.ranked.as_ref())
+                {
+                    eprintln!(
+                        "  ranked by the critic of {} among the planner's top {}: chosen by place {:?}",
+                        rk.ranker, rk.top, rk.chosen
+                    );
+                }
             }
         }
     }

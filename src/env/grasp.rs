@@ -45,6 +45,7 @@ use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
+mod probe;
 mod retry;
 pub use retry::NoRetry;
 use retry::RetryStart;
@@ -541,13 +542,7 @@ impl GraspEnv {
         if moved {
             reset(&mut self.sim, &scene)?;
         }
-        for _ in 0..CLEARANCE_STEPS {
-            if !self.sim.hand_overlaps_object() {
-                break;
-            }
-            scene.grasp_point[2] += 0.005;
-            reset(&mut self.sim, &scene)?;
-        }
+        clear_hand(&mut self.sim, &mut scene, reset)?;
         self.steps = 0;
         self.episode_return = 0.0;
         self.touched_in_stage1 = false;
@@ -993,6 +988,24 @@ pub fn run_episode(env: &mut GraspEnv, agent: &mut dyn Agent, seed: u64) -> Epis
     env.last_episode()
         .cloned()
         .unwrap_or_else(|| unreachable!("a finished episode has a summary"))
+}
+
+/// Raises the hand of `scene` in 5 mm steps (at most [`CLEARANCE_STEPS`]) while it
+/// overlaps the object, resetting `sim` with `reset` at each step: every placement starts
+/// clear of the object.
+fn clear_hand(
+    sim: &mut HandSim,
+    scene: &mut Scene,
+    reset: impl Fn(&mut HandSim, &Scene) -> Result<(), SimError>,
+) -> Result<(), SimError> {
+    for _ in 0..CLEARANCE_STEPS {
+        if !sim.hand_overlaps_object() {
+            break;
+        }
+        scene.grasp_point[2] += 0.005;
+        reset(sim, scene)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

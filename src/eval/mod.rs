@@ -14,6 +14,7 @@
 pub mod conditions;
 pub mod paired;
 pub mod plot;
+pub mod rank;
 pub mod record;
 pub mod regression;
 pub mod trial;
@@ -26,6 +27,7 @@ use crate::ppo::LoadedPolicy;
 use crate::sim::{FailureReport, PhysicsFailure};
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
+pub use rank::RankedPregrasp;
 use rayon::prelude::*;
 use record::{RecordOptions, RecordingEntry};
 use serde::{Deserialize, Serialize};
@@ -354,6 +356,34 @@ pub struct PregraspStats {
     pub planned: usize,
     /// Episodes left at the default placement (the planner found no grasp).
     pub default_placement: usize,
+    /// How a critic chose among the planner's top placements (`--rank-top`); absent when
+    /// the planner's best started every episode.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ranked: Option<RankStats>,
+}
+
+/// How a critic chose the placements of an evaluation ([`rank::RankedPregrasp`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RankStats {
+    /// Placements compared per plan (the planner's best first).
+    pub top: usize,
+    /// The checkpoint whose critic ranked them.
+    pub ranker: String,
+    /// Plans that chose each place of the planner's order (index 0: its best).
+    pub chosen: Vec<usize>,
+}
+
+impl PregraspStats {
+    /// The placement as a name: the planner's, with its ranking where one chose.
+    pub fn name(&self) -> String {
+        match &self.ranked {
+            Some(r) => format!(
+                "{}, ranked by {} among the top {}",
+                self.placement, r.ranker, r.top
+            ),
+            None => self.placement.clone(),
+        }
+    }
 }
 
 /// How an agent's lifts were made, over the episodes that lifted: the learned-grasp

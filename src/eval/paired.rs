@@ -52,10 +52,10 @@ pub fn mcnemar_exact(b: usize, c: usize) -> f64 {
 }
 
 /// Where an agent's hands started: the pre-grasp planner's name, else `top-down`.
-fn placement(r: &AgentResult) -> &str {
+fn placement(r: &AgentResult) -> String {
     r.pregrasp
         .as_ref()
-        .map_or("top-down", |p| p.placement.as_str())
+        .map_or_else(|| "top-down".to_string(), |p| p.name())
 }
 
 /// Why `a` and `b` cannot be paired trial by trial (their trials are not the same
@@ -298,8 +298,24 @@ mod tests {
             placement: "antipodal".into(),
             planned: 5,
             default_placement: 0,
+            ranked: None,
         });
         assert!(paired(&a, &f).is_none());
+        // Placements a critic chose among the planner's top ones: another placement.
+        let mut r = f.clone();
+        if let Some(p) = r.pregrasp.as_mut() {
+            p.ranked = Some(crate::eval::RankStats {
+                top: 5,
+                ranker: "runs/q/checkpoints/latest".into(),
+                chosen: vec![3, 1, 1, 0, 0],
+            });
+        }
+        assert!(paired(&f, &r).is_none());
+        assert!(unpaired_lines(&[f.clone(), r.clone()]).contains(
+            "different placements (antipodal and antipodal, ranked by \
+             runs/q/checkpoints/latest among the top 5)"
+        ));
+        assert!(paired(&r, &r.clone()).is_some());
         let lines = unpaired_lines(&[a.clone(), e, f]);
         assert!(
             lines.contains(

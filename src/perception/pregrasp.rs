@@ -114,9 +114,23 @@ impl Default for AntipodalPregrasp {
     }
 }
 
-impl PregraspPlanner for AntipodalPregrasp {
-    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
-        let cloud = camera_cloud(sim, &self.cameras, seed).ok()?;
+impl AntipodalPregrasp {
+    /// Up to `top` distinct placements for the episode of `seed`, best score first: the
+    /// sampler's candidates on the depth cloud within `max_tilt_rad` of straight down, none
+    /// the same as another ([`PlannedGrasp::same_as`]) or as a grasp in `avoid`, else the
+    /// grasp across the cloud's narrowest horizontal extent. The first is
+    /// [`PregraspPlanner::plan`]'s; the others are what a ranker chooses among
+    /// (`grasp eval --rank-top`).
+    pub fn candidates(
+        &self,
+        sim: &HandSim,
+        seed: u64,
+        avoid: &[PlannedGrasp],
+        top: usize,
+    ) -> Vec<PlannedGrasp> {
+        let Ok(cloud) = camera_cloud(sim, &self.cameras, seed) else {
+            return Vec::new();
+        };
         let cfg = AntipodalConfig {
             seed,
             ..self.antipodal
@@ -128,13 +142,33 @@ impl PregraspPlanner for AntipodalPregrasp {
             grasp_point: g.center.into(),
             hand_yaw: g.closing.y.atan2(g.closing.x),
         };
-        let new = |p: &PlannedGrasp| !avoid.iter().any(|a| a.same_as(p));
-        candidates
+        let mut out: Vec<PlannedGrasp> = Vec::new();
+        for p in candidates
             .iter()
             .take(self.max_candidates)
             .filter_map(|c| snap_top_down(&c.grasp, self.max_tilt_rad).map(planned))
-            .find(new)
-            .or_else(|| principal_axis_grasp(&cloud).map(planned).filter(new))
+        {
+            if out.len() >= top.max(1) {
+                break;
+            }
+            if !avoid.iter().chain(&out).any(|a| a.same_as(&p)) {
+                out.push(p);
+            }
+        }
+        if out.is_empty() {
+            out.extend(
+                principal_axis_grasp(&cloud)
+                    .map(planned)
+                    .filter(|p| !avoid.iter().any(|a| a.same_as(p))),
+            );
+        }
+        out
+    }
+}
+
+impl PregraspPlanner for AntipodalPregrasp {
+    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
+        self.candidates(sim, seed, avoid, 1).first().copied()
     }
 }
 
@@ -198,6 +232,17 @@ mod tests {
         assert!(!c.same_as(&a), "{c:?} against {a:?}");
         let d = planner.plan(&sim, 7, &[a, c]).expect("a third plan");
         assert!(!d.same_as(&a) && !d.same_as(&c));
+        // The top candidates a ranker chooses among: the plan first, then others, no two
+        // the same grasp, none that the trial tried.
+        let top = planner.candidates(&sim, 7, &[], 5);
+        assert_eq!(top.len(), 5);
+        assert_eq!(top[0], a);
+        for (i, p) in top.iter().enumerate() {
+            assert!(top[..i].iter().all(|q| !q.same_as(p)), "{i}: {p:?}");
+        }
+        let untried = planner.candidates(&sim, 7, &[a], 3);
+        assert_eq!(untried[0], c);
+        assert!(untried.iter().all(|p| !p.same_as(&a)));
     }
 
     #[test]

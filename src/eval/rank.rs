@@ -1,0 +1,113 @@
+//! Choosing among the planner's top pre-grasps by a trained critic (beyond the paper;
+//! `grasp eval --pregrasp antipodal --rank-top K`).
+//!
+//! The antipodal planner scores two-finger grasps by geometry alone and the episode starts
+//! from its best. [`RankedPregrasp`] looks at its `K` best distinct placements through a
+//! policy's eyes instead: for each, the episode's stage 1 runs in a probe environment of
+//! its own (the object exactly where the trial's scene put it,
+//! [`GraspEnv::first_observation_at`]), and the policy's critic values the first
+//! observation, the closure stage 1 reached there (joint angles, touch, torque levels).
+//! The placement of the highest value starts the episode; ties keep the planner's order.
+//! One ranker places every agent of an evaluation, scripted or learned, so all of them
+//! still start each trial from the same pose.
+
+use crate::env::grasp::GraspEnv;
+use crate::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
+use crate::ppo::LoadedPolicy;
+use crate::sim::HandSim;
+use candle_core::{Device, Tensor};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
+/// Most placements a ranker may compare (`--rank-top`).
+pub const MAX_RANK_TOP: usize = 10;
+
+/// The critic's value of an episode's first observation: the observation normalised as
+/// in training, the recurrent state zero, as at any episode's start.
+pub fn first_value(critic: &LoadedPolicy, obs: &[f32]) -> candle_core::Result<f32> {
+    let net = &critic.policy;
+    let err = |e: crate::policy::PolicyError| candle_core::Error::Msg(e.to_string());
+    let x = critic.normalize(obs);
+    let d = x.len();
+    let t = Tensor::from_vec(x, (1, 1, d), &Device::Cpu)?;
+    let starts = Tensor::ones((1, 1), candle_core::DType::F32, &Device::Cpu)?;
+    let h0 = net.initial_state(1).map_err(err)?;
+    let out = net.forward_seq(&t, &starts, h0.as_ref()).map_err(err)?;
+    out.value.flatten_all()?.get(0)?.to_scalar::<f32>()
+}
+
+/// The antipodal planner's `top` best placements, the critic's choice among them.
+pub struct RankedPregrasp {
+    base: AntipodalPregrasp,
+    top: usize,
+    probe: GraspEnv,
+    critic: Arc<LoadedPolicy>,
+    /// How often each place of the planner's order was chosen (index 0: its best), shared
+    /// by one agent's workers.
+    chosen: Arc<Vec<AtomicUsize>>,
+}
+
+impl RankedPregrasp {
+    /// Ranks `base`'s `top` best placements (at most [`MAX_RANK_TOP`]) by `critic`'s
+    /// value of the first observation in `probe`, an environment in the critic's own
+    /// setup (observation layout, closing path) whose first object is the trial's.
+    pub fn new(
+        base: AntipodalPregrasp,
+        top: usize,
+        probe: GraspEnv,
+        critic: Arc<LoadedPolicy>,
+        chosen: Arc<Vec<AtomicUsize>>,
+    ) -> RankedPregrasp {
+        RankedPregrasp {
+            base,
+            top: top.clamp(1, MAX_RANK_TOP),
+            probe,
+            critic,
+            chosen,
+        }
+    }
+
+    /// An empty tally of the places chosen, one counter per place of `top`.
+    pub fn tally(top: usize) -> Arc<Vec<AtomicUsize>> {
+        Arc::new(
+            (0..top.clamp(1, MAX_RANK_TOP))
+                .map(|_| AtomicUsize::new(0))
+                .collect(),
+        )
+    }
+
+    /// The critic's value of `placement` on the object at rest in `sim`, or `None` where
+    /// the probe's scene is refused, its stage 1 fails or the network does.
+    fn value(&mut self, sim: &HandSim, placement: &PlannedGrasp) -> Option<f32> {
+        let pose = sim.object_pose()?;
+        let obs = self.probe.first_observation_at(&pose, placement).ok()?;
+        if self.probe.sim().failure().is_some() {
+            return None;
+        }
+        first_value(&self.critic, &obs)
+            .ok()
+            .filter(|v| v.is_finite())
+    }
+}
+
+impl PregraspPlanner for RankedPregrasp {
+    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
+        let candidates = self.base.candidates(sim, seed, avoid, self.top);
+        let mut best: Option<(usize, f32)> = None;
+        if candidates.len() > 1 {
+            for (i, c) in candidates.iter().enumerate() {
+                if let Some(v) = self.value(sim, c) {
+                    if best.is_none_or(|(_, b)| v > b) {
+                        best = Some((i, v));
+                    }
+                }
+            }
+        }
+        let i = best.map_or(0, |b| b.0);
+        let choice = candidates.get(i).copied()?;
+        if let Some(n) = self.chosen.get(i) {
+            n.fetch_add(1, Ordering::Relaxed);
+        }
+        Some(choice)
+    }
+}
