@@ -367,15 +367,28 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 17);
-    // The main job until 2026-12-05 evening: the main job with 5 synergies, nothing else.
-    let quick = TrainConfig::load(&dir.join("quick_pca5.toml")).unwrap();
+    assert_eq!(n, 18);
+    // The main job until 2026-12-05 night: the main job with the grip at 0.5, nothing else.
     let main = TrainConfig::load(&dir.join("quick.toml")).unwrap();
-    assert_eq!((main.n_components, quick.n_components), (8, 5));
-    let mut as_main = quick.clone();
-    as_main.n_components = main.n_components;
+    let half = TrainConfig::load(&dir.join("quick_grip_half.toml")).unwrap();
+    assert_eq!(
+        (
+            main.env.grasp.action.grip_scale,
+            half.env.grasp.action.grip_scale
+        ),
+        (0.25, 0.5)
+    );
+    let mut as_main = half.clone();
+    as_main.env.grasp.action.grip_scale = main.env.grasp.action.grip_scale;
     as_main.name = main.name.clone();
     assert_eq!(as_main, main);
+    // The main job until 2026-12-05 evening: that with 5 synergies, nothing else.
+    let quick = TrainConfig::load(&dir.join("quick_pca5.toml")).unwrap();
+    assert_eq!((half.n_components, quick.n_components), (8, 5));
+    let mut as_half = quick.clone();
+    as_half.n_components = half.n_components;
+    as_half.name = half.name.clone();
+    assert_eq!(as_half, half);
     // The modality ablation's arms: that recipe with another modality, nothing else.
     // The main job with the placement mix: [env.placement] and milestones, nothing else.
     let mut placed = TrainConfig::load(&dir.join("quick_placement.toml")).unwrap();
@@ -460,12 +473,15 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
         n += 1;
     }
     assert_eq!(n, 7);
-    // The main job (quick.toml) is the grip_half lever's recipe with 8 synergies; only
-    // that, its name, its time cap and how often it redraws the curve differ.
+    // The main job (quick.toml) is the grip_half lever's recipe with 8 synergies and the
+    // grip at a quarter; only that, its name, its time cap and how often it redraws the
+    // curve differ.
     let mut quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
     let half = TrainConfig::load(&dir.join("levers/grip_half.toml")).unwrap();
     assert_eq!(quick.time_budget_minutes, Some(15.0));
     assert_eq!((quick.n_components, half.n_components), (8, 5));
+    assert_eq!(quick.env.grasp.action.grip_scale, 0.25);
+    quick.env.grasp.action.grip_scale = half.env.grasp.action.grip_scale;
     quick.n_components = half.n_components;
     quick.name = half.name.clone();
     quick.time_budget_minutes = half.time_budget_minutes;
