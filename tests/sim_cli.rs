@@ -305,6 +305,10 @@ fn a_critic_ranks_the_planners_placements_for_every_agent() {
         env!("CARGO_MANIFEST_DIR"),
         "/assets/policies/fig5_gru_m3_pca8"
     );
+    let conditions = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/sensing/conditions.toml"
+    );
     let agents = format!("{policy},baseline1");
     let (ok, out, err) = grasp(&[
         "--seed",
@@ -369,6 +373,17 @@ fn a_critic_ranks_the_planners_placements_for_every_agent() {
         (
             &["--pregrasp", "antipodal", "--rank-top", "2"][..],
             "needs a critic to rank with",
+        ),
+        (
+            &[
+                "--pregrasp",
+                "antipodal",
+                "--rank-top",
+                "2",
+                "--perturb",
+                conditions,
+            ][..],
+            "the ranker's probes would close on the nominal object",
         ),
     ] {
         let mut all = vec!["eval", "--policy", "baseline1", "--objects", "box_sugar"];

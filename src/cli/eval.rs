@@ -568,6 +568,13 @@ fn ranker(
     if a.rank_top < 2 {
         return Ok(None);
     }
+    if conditions.is_some_and(|c| c.randomization.enabled) {
+        bail!(
+            "--rank-top {} with --perturb's [randomization]: the ranker's probes would close \
+             on the nominal object, not the episode's randomised one; rank without it",
+            a.rank_top
+        );
+    }
     let dir = match &a.ranker {
         Some(d) => d.clone(),
         None => agents
