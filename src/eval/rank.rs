@@ -111,3 +111,67 @@ impl PregraspPlanner for RankedPregrasp {
         Some(choice)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::env::api::ActionSpec;
+    use crate::policy::{build_policy, PolicyConfig};
+    use crate::ppo::PpoConfig;
+
+    fn critic(zero_all_but_bias: Option<f32>) -> LoadedPolicy {
+        let cfg = PolicyConfig {
+            embed_dim: 8,
+            gru_hidden: 6,
+            ..PolicyConfig::default()
+        };
+        let spec = ActionSpec {
+            continuous: 2,
+            lift: true,
+        };
+        let policy = build_policy(&cfg, 4, spec, 3).expect("policy");
+        if let Some(b) = zero_all_but_bias {
+            for (name, v) in policy.params().vars() {
+                let fill = if name == "critic.bias" { b } else { 0.0 };
+                v.set(&v.ones_like().unwrap().affine(0.0, fill as f64).unwrap())
+                    .unwrap();
+            }
+        }
+        LoadedPolicy {
+            policy,
+            obs_rms: None,
+            config: PpoConfig::default(),
+            obs_clip: 10.0,
+        }
+    }
+
+    #[test]
+    fn the_first_value_of_a_zero_network_is_its_critic_bias() {
+        // Every weight and bias zero but the critic's bias b = 0.7: the embedding gives
+        // tanh(0) = 0, the GRU's gates sigmoid(0) = 0.5 and candidate tanh(0) = 0, so
+        // h = 0.5 * 0 + 0.5 * h0 = 0 from the zero start state, and V = w . h + b = 0.7
+        // whatever the observation.
+        let c = critic(Some(0.7));
+        for obs in [[0.0f32; 4], [1.0, -2.0, 3.0, 0.5]] {
+            let v = first_value(&c, &obs).expect("value");
+            assert!((v - 0.7).abs() < 1e-6, "{v}");
+        }
+    }
+
+    #[test]
+    fn the_first_value_is_the_networks_value_at_an_episode_start() {
+        // A randomly initialised network: the value of the sequence's first step, from the
+        // zero state with the start flag set, as training computes it.
+        let c = critic(None);
+        let obs = [0.3f32, -0.1, 0.8, 0.0];
+        let t = Tensor::from_vec(obs.to_vec(), (1, 1, 4), &Device::Cpu).unwrap();
+        let starts = Tensor::ones((1, 1), candle_core::DType::F32, &Device::Cpu).unwrap();
+        let out = c.policy.forward_seq(&t, &starts, None).unwrap();
+        let want: Vec<f32> = out.value.flatten_all().unwrap().to_vec1().unwrap();
+        assert_eq!(first_value(&c, &obs).unwrap(), want[0]);
+        assert_eq!(MAX_RANK_TOP, 10);
+        assert_eq!(RankedPregrasp::tally(3).len(), 3);
+        assert_eq!(RankedPregrasp::tally(0).len(), 1);
+        assert_eq!(RankedPregrasp::tally(50).len(), MAX_RANK_TOP);
+    }
+}
