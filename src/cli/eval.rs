@@ -624,16 +624,19 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         }
     }
     let sim_cfg = eval_sim_config(a.sim_config.as_ref(), &agents, g)?;
+    // The environment of agent `ag` (or of the ranker) on object `o` alone.
+    let env_on = |ag: &AgentEnv, o: usize| {
+        GraspEnv::new(
+            &robot,
+            vec![objects[o].clone()],
+            ag.model.clone(),
+            sim_cfg.clone(),
+            ag.env.clone(),
+        )
+    };
     let ranker = ranker(a, &agents, conditions.as_ref(), g)?;
     if let Some(r) = &ranker {
-        let probe = GraspEnv::new(
-            &robot,
-            vec![objects[0].clone()],
-            r.env.model.clone(),
-            sim_cfg.clone(),
-            r.env.env.clone(),
-        )?;
-        check_obs_layout(&r.dir, &r.env, &probe)?;
+        check_obs_layout(&r.dir, &r.env, &env_on(&r.env, 0)?)?;
     }
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
@@ -653,26 +656,13 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         let counts: Arc<[AtomicUsize; 2]> = Arc::new(Default::default());
         let chosen = RankedPregrasp::tally(a.rank_top);
         let make_env = |o: usize| {
-            let object = vec![objects[o].clone()];
-            let env = GraspEnv::new(
-                &robot,
-                object.clone(),
-                ag.model.clone(),
-                sim_cfg.clone(),
-                ag.env.clone(),
-            )?;
+            let env = env_on(ag, o)?;
             let inner: Box<dyn PregraspPlanner> = match &ranker {
                 None => Box::new(AntipodalPregrasp::default()),
                 Some(r) => Box::new(RankedPregrasp::new(
                     AntipodalPregrasp::default(),
                     a.rank_top,
-                    GraspEnv::new(
-                        &robot,
-                        object,
-                        r.env.model.clone(),
-                        sim_cfg.clone(),
-                        r.env.env.clone(),
-                    )?,
+                    env_on(&r.env, o)?,
                     r.critic.clone(),
                     chosen.clone(),
                 )),
@@ -713,31 +703,29 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         }
         if a.pregrasp == Placement::Antipodal {
             let [planned, fallback] = [0, 1].map(|k| counts[k].load(Ordering::Relaxed));
-            if let Some(r) = results.last_mut() {
-                r.pregrasp = Some(PregraspStats {
-                    placement: placement_name(a.pregrasp),
-                    planned,
-                    default_placement: fallback,
-                    ranked: ranker.as_ref().map(|rk| RankStats {
-                        top: a.rank_top,
-                        ranker: rk.dir.display().to_string(),
-                        chosen: chosen.iter().map(|n| n.load(Ordering::Relaxed)).collect(),
-                    }),
-                });
-            }
+            let ranked = ranker.as_ref().map(|rk| RankStats {
+                top: a.rank_top,
+                ranker: rk.dir.display().to_string(),
+                chosen: chosen.iter().map(|n| n.load(Ordering::Relaxed)).collect(),
+            });
             if !g.quiet {
                 eprintln!(
                     "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no plan on the cloud)"
                 );
-                if let Some(rk) = results
-                    .last()
-                    .and_then(|r| r.pregrasp.as_ref()?.ranked.as_ref())
-                {
+                if let Some(rk) = &ranked {
                     eprintln!(
                         "  ranked by the critic of {} among the planner's top {}: chosen by place {:?}",
                         rk.ranker, rk.top, rk.chosen
                     );
                 }
+            }
+            if let Some(r) = results.last_mut() {
+                r.pregrasp = Some(PregraspStats {
+                    placement: placement_name(a.pregrasp),
+                    planned,
+                    default_placement: fallback,
+                    ranked,
+                });
             }
         }
     }

@@ -1013,16 +1013,21 @@ mod tests {
     use super::*;
     use crate::robot::Side;
 
-    /// The default environment on the default box alone.
-    fn box_env() -> GraspEnv {
+    /// The default environment on `object` alone (named "box").
+    pub(super) fn env_on(object: ObjectSpec) -> GraspEnv {
         GraspEnv::new(
             &Robot::builtin(Side::Left),
-            vec![("box".to_string(), ObjectSpec::default_box())],
+            vec![("box".to_string(), object)],
             crate::synergy::default_model(),
             SimConfig::default(),
             EnvConfig::default(),
         )
         .expect("env")
+    }
+
+    /// The default environment on the default box alone.
+    fn box_env() -> GraspEnv {
+        env_on(ObjectSpec::default_box())
     }
 
     #[test]

@@ -96,26 +96,7 @@ impl PolicyAgent {
 
     /// The action for `obs`, or the network's error ([`Agent::act`] lifts instead).
     pub fn try_act(&mut self, obs: &[f32]) -> candle_core::Result<Action> {
-        let x = self.policy.normalize(obs);
-        let d = x.len();
-        let t = Tensor::from_vec(x, (1, 1, d), &Device::Cpu)?;
-        let s = Tensor::from_vec(
-            vec![if self.first { 1.0f32 } else { 0.0 }],
-            (1, 1),
-            &Device::Cpu,
-        )?;
-        if self.hidden.is_none() {
-            self.hidden = self
-                .policy
-                .policy
-                .initial_state(1)
-                .map_err(|e| candle_core::Error::Msg(e.to_string()))?;
-        }
-        let out = self
-            .policy
-            .policy
-            .forward_seq(&t, &s, self.hidden.as_ref())
-            .map_err(|e| candle_core::Error::Msg(e.to_string()))?;
+        let out = policy_step(&self.policy, obs, self.first, self.hidden.as_ref())?;
         self.hidden = out.hidden;
         self.first = false;
         let a = if self.stochastic {
@@ -128,6 +109,30 @@ impl PolicyAgent {
             lift: a.rho.first().is_some_and(|&r| r > 0.5),
         })
     }
+}
+
+/// One step of `policy` on the raw observation `obs`: normalised as in training, with the
+/// recurrent state `hidden` (zero when `None`), reset first where `start` (an episode's
+/// first observation).
+pub fn policy_step(
+    policy: &LoadedPolicy,
+    obs: &[f32],
+    start: bool,
+    hidden: Option<&Tensor>,
+) -> candle_core::Result<crate::policy::PolicyOutput> {
+    let err = |e: crate::policy::PolicyError| candle_core::Error::Msg(e.to_string());
+    let x = policy.normalize(obs);
+    let d = x.len();
+    let t = Tensor::from_vec(x, (1, 1, d), &Device::Cpu)?;
+    let s = Tensor::from_vec(vec![if start { 1.0f32 } else { 0.0 }], (1, 1), &Device::Cpu)?;
+    let zero = match hidden {
+        Some(_) => None,
+        None => policy.policy.initial_state(1).map_err(err)?,
+    };
+    policy
+        .policy
+        .forward_seq(&t, &s, hidden.or(zero.as_ref()))
+        .map_err(err)
 }
 
 impl Agent for PolicyAgent {

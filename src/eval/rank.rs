@@ -15,7 +15,6 @@ use crate::env::grasp::GraspEnv;
 use crate::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use crate::ppo::LoadedPolicy;
 use crate::sim::HandSim;
-use candle_core::{Device, Tensor};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
@@ -25,14 +24,7 @@ pub const MAX_RANK_TOP: usize = 10;
 /// The critic's value of an episode's first observation: the observation normalised as
 /// in training, the recurrent state zero, as at any episode's start.
 pub fn first_value(critic: &LoadedPolicy, obs: &[f32]) -> candle_core::Result<f32> {
-    let net = &critic.policy;
-    let err = |e: crate::policy::PolicyError| candle_core::Error::Msg(e.to_string());
-    let x = critic.normalize(obs);
-    let d = x.len();
-    let t = Tensor::from_vec(x, (1, 1, d), &Device::Cpu)?;
-    let starts = Tensor::ones((1, 1), candle_core::DType::F32, &Device::Cpu)?;
-    let h0 = net.initial_state(1).map_err(err)?;
-    let out = net.forward_seq(&t, &starts, h0.as_ref()).map_err(err)?;
+    let out = super::policy_step(critic, obs, true, None)?;
     out.value.flatten_all()?.get(0)?.to_scalar::<f32>()
 }
 
@@ -118,6 +110,7 @@ mod tests {
     use crate::env::api::ActionSpec;
     use crate::policy::{build_policy, PolicyConfig};
     use crate::ppo::PpoConfig;
+    use candle_core::{Device, Tensor};
 
     fn critic(zero_all_but_bias: Option<f32>) -> LoadedPolicy {
         let cfg = PolicyConfig {

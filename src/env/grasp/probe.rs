@@ -56,10 +56,9 @@ impl GraspEnv {
 #[cfg(test)]
 mod tests {
     use crate::env::api::Env;
-    use crate::env::grasp::{EnvConfig, GraspEnv};
+    use crate::env::grasp::tests::env_on;
     use crate::perception::pregrasp::{PlannedGrasp, PregraspPlanner};
-    use crate::robot::{Robot, Side};
-    use crate::sim::{HandSim, ObjectSpec, SimConfig};
+    use crate::sim::{HandSim, ObjectSpec};
 
     /// Plans 5 cm above the table over the object's centre, at yaw 0.3.
     struct OverObject;
@@ -84,15 +83,7 @@ mod tests {
         // placement on the object's pose gives the episode's own first observation (the
         // same world, the same stage 1); a placement 3 cm off the box's axis stops stage 1
         // elsewhere, and the probe leaves no trace in the next episode.
-        let mut e = GraspEnv::new(
-            &Robot::builtin(Side::Left),
-            vec![("box".to_string(), ObjectSpec::default_box())],
-            crate::synergy::default_model(),
-            SimConfig::default(),
-            EnvConfig::default(),
-        )
-        .expect("env")
-        .with_pregrasp(Box::new(OverObject));
+        let mut e = env_on(ObjectSpec::default_box()).with_pregrasp(Box::new(OverObject));
         e.reset_scene(3).expect("scene");
         let pose = e.sim.object_pose().expect("pose");
         let here = over(&e.sim);

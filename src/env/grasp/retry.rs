@@ -112,10 +112,10 @@ impl GraspEnv {
 mod tests {
     use super::*;
     use crate::env::api::{Action, Env};
-    use crate::env::grasp::{run_episode, Agent, EnvConfig};
-    use crate::robot::{Robot, Side};
+    use crate::env::grasp::tests::env_on;
+    use crate::env::grasp::{run_episode, Agent};
     use crate::sim::settle::{REST_SPEED, REST_SPIN};
-    use crate::sim::{ObjectSpec, SimConfig};
+    use crate::sim::ObjectSpec;
 
     /// Lifts at once, fingers as stage 1 left them.
     struct LiftNow(usize);
@@ -130,24 +130,13 @@ mod tests {
         }
     }
 
-    fn env(object: ObjectSpec) -> GraspEnv {
-        GraspEnv::new(
-            &Robot::builtin(Side::Left),
-            vec![("box".to_string(), object)],
-            crate::synergy::default_model(),
-            SimConfig::default(),
-            EnvConfig::default(),
-        )
-        .expect("env")
-    }
-
     #[test]
     fn a_failed_lift_is_retried_from_where_the_object_came_to_rest() {
         // A slippery 6 cm box (friction 0.05, 0.5 kg) slides out of a hand that lifts at
         // once: the attempt fails and the box comes to rest on the table. The retry's
         // scene holds the box at exactly that pose, still, the hand top-down over its
         // centre and clear of it.
-        let mut e = env(ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.05));
+        let mut e = env_on(ObjectSpec::cuboid([0.03, 0.03, 0.03], 0.5, 0.05));
         assert_eq!(e.prepare_retry(), Err(NoRetry::NoAttempt));
         let n = e.action_spec().continuous;
         let first = run_episode(&mut e, &mut LiftNow(n), 11);
@@ -182,7 +171,7 @@ mod tests {
     #[test]
     fn a_won_trial_is_not_retried() {
         // Baseline 1's power grasp holds the default box.
-        let mut e = env(ObjectSpec::default_box());
+        let mut e = env_on(ObjectSpec::default_box());
         assert!(e.run_baseline(false, 0).expect("baseline").success);
         assert_eq!(e.prepare_retry(), Err(NoRetry::Succeeded));
     }
