@@ -468,6 +468,46 @@ fn the_grip_policy_grasps_and_a_config_without_its_grip_is_refused() {
 }
 
 #[test]
+fn grasp_run_ramps_the_grip_as_the_checkpoint_config_says() {
+    // The grip policy (grip_scale 0.5) with `grip_ramp` set in a copy of its config: a ramp
+    // of 1.0 caps nothing (w <= 0.5 < k), so the run is the original's line for line; a
+    // ramp of 0.01 caps the grip from the first command, so the commands differ.
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = std::fs::read_to_string(Path::new(GRIP_POLICY).join("config.toml")).unwrap();
+    let run_log = |policy: &str, name: &str| {
+        let log = dir.path().join(name);
+        let (ok, _, err) = run_json(&[
+            "--policy",
+            policy,
+            "--object",
+            "box",
+            "--seed",
+            "1",
+            "--log",
+            log.to_str().unwrap(),
+        ]);
+        assert!(ok, "{name}: {err}");
+        std::fs::read_to_string(log).unwrap()
+    };
+    let original = run_log(GRIP_POLICY, "original.jsonl");
+    for (ramp, same) in [("1.0", true), ("0.01", false)] {
+        let copy = dir.path().join(format!("ramp_{ramp}"));
+        std::fs::create_dir(&copy).unwrap();
+        for f in ["checkpoint.safetensors", "synergy.json"] {
+            std::fs::copy(Path::new(GRIP_POLICY).join(f), copy.join(f)).unwrap();
+        }
+        let ramped = cfg.replace(
+            "grip_scale = 0.5",
+            &format!("grip_scale = 0.5\ngrip_ramp = {ramp}"),
+        );
+        assert_ne!(ramped, cfg);
+        std::fs::write(copy.join("config.toml"), ramped).unwrap();
+        let log = run_log(copy.to_str().unwrap(), &format!("ramp_{ramp}.jsonl"));
+        assert_eq!(log == original, same, "grip_ramp = {ramp}");
+    }
+}
+
+#[test]
 fn bad_inputs_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let bad_cal = dir.path().join("cal.json");

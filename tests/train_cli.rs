@@ -367,21 +367,38 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 18);
-    // The main job until 2026-12-05 night: the main job with the grip at 0.5, nothing else.
+    assert_eq!(n, 19);
+    // The main job until 2026-12-06: the main job without the grip's ramp, nothing else.
     let main = TrainConfig::load(&dir.join("quick.toml")).unwrap();
+    let quarter = TrainConfig::load(&dir.join("quick_grip_quarter.toml")).unwrap();
+    let act = &main.env.grasp.action;
+    assert_eq!((act.grip_ramp, act.grip_ramp_in_training), (0.15, false));
+    let mut as_main = quarter.clone();
+    as_main.env.grasp.action.grip_ramp = act.grip_ramp;
+    as_main.env.grasp.action.grip_ramp_in_training = act.grip_ramp_in_training;
+    as_main.name = main.name.clone();
+    assert_eq!(as_main, main);
+    // Training's own episodes are the same in both (no ramp): it acts only afterwards.
+    let (mut trains, quarter_trains) = (
+        main.env.grasp.for_training(),
+        quarter.env.grasp.for_training(),
+    );
+    assert_eq!(trains.action.grip_ramp, 0.0);
+    trains.action.grip_ramp_in_training = true;
+    assert_eq!(trains, quarter_trains);
+    // The main job until 2026-12-05 night: that with the grip at 0.5, nothing else.
     let half = TrainConfig::load(&dir.join("quick_grip_half.toml")).unwrap();
     assert_eq!(
         (
-            main.env.grasp.action.grip_scale,
+            quarter.env.grasp.action.grip_scale,
             half.env.grasp.action.grip_scale
         ),
         (0.25, 0.5)
     );
-    let mut as_main = half.clone();
-    as_main.env.grasp.action.grip_scale = main.env.grasp.action.grip_scale;
-    as_main.name = main.name.clone();
-    assert_eq!(as_main, main);
+    let mut as_quarter = half.clone();
+    as_quarter.env.grasp.action.grip_scale = quarter.env.grasp.action.grip_scale;
+    as_quarter.name = quarter.name.clone();
+    assert_eq!(as_quarter, quarter);
     // The main job until 2026-12-05 evening: that with 5 synergies, nothing else.
     let quick = TrainConfig::load(&dir.join("quick_pca5.toml")).unwrap();
     assert_eq!((half.n_components, quick.n_components), (8, 5));
@@ -474,14 +491,16 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
     }
     assert_eq!(n, 7);
     // The main job (quick.toml) is the grip_half lever's recipe with 8 synergies and the
-    // grip at a quarter; only that, its name, its time cap and how often it redraws the
-    // curve differ.
+    // grip at a quarter, ramped where it acts; only that, its name, its time cap and how
+    // often it redraws the curve differ.
     let mut quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
     let half = TrainConfig::load(&dir.join("levers/grip_half.toml")).unwrap();
     assert_eq!(quick.time_budget_minutes, Some(15.0));
     assert_eq!((quick.n_components, half.n_components), (8, 5));
     assert_eq!(quick.env.grasp.action.grip_scale, 0.25);
     quick.env.grasp.action.grip_scale = half.env.grasp.action.grip_scale;
+    quick.env.grasp.action.grip_ramp = half.env.grasp.action.grip_ramp;
+    quick.env.grasp.action.grip_ramp_in_training = half.env.grasp.action.grip_ramp_in_training;
     quick.n_components = half.n_components;
     quick.name = half.name.clone();
     quick.time_budget_minutes = half.time_budget_minutes;

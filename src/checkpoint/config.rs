@@ -703,6 +703,14 @@ mod tests {
             ("[env.randomization]\nsize_scale = [1.0]\n", "size_scale"),
             ("[env.action]\ngrip_scale = 1.5\n", "action.grip_scale"),
             (
+                "[env.action]\ngrip_scale = 0.25\ngrip_ramp = -0.1\n",
+                "action.grip_ramp: -0.1 is outside [0, 1]",
+            ),
+            (
+                "[env.action]\ngrip_scale = 0.0\ngrip_ramp = 0.05\n",
+                "action.grip_ramp: ramps the grip, but the grip is off",
+            ),
+            (
                 "[env.reward]\ndisplacement_weight = -1.0\n",
                 "reward.displacement_weight",
             ),

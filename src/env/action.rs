@@ -63,12 +63,34 @@ pub struct ActionConfig {
     /// `theta_target = (1 - w) eq.2 + w theta_closed`. With `w = 1` the fingers squeeze
     /// as baseline 1's do; the policy learns when. In [0, 1].
     pub grip_scale: f64,
+    /// Beyond the paper (0: off): how fast the grip may close. At the episode's k-th
+    /// control step (k = 1, 2, ...; an attempt's, after a retry) the blend weight is
+    /// capped at `k * grip_ramp`, so the grip reaches `grip_scale` over
+    /// `grip_scale / grip_ramp` steps instead of at once ([`ActionConfig::ramped_grip`]).
+    /// Needs the grip (`grip_scale > 0`). In [0, 1].
+    pub grip_ramp: f64,
+    /// Whether training's own episodes ramp the grip too (default true). With false the
+    /// policy trains with the grip at once (`grasp train`, and the Python module, whose
+    /// environments are training's) and the ramp applies where the checkpoint acts
+    /// afterwards: `grasp eval`, `grasp run`, `grasp rollout` (see
+    /// [`crate::env::grasp::EnvConfig::for_training`]).
+    pub grip_ramp_in_training: bool,
 }
 
 impl ActionConfig {
     /// Continuous action components for `n` synergies: `n + 2`, plus 1 with the grip.
     pub fn continuous(&self, n: usize) -> usize {
         n + 2 + usize::from(self.grip_scale > 0.0)
+    }
+
+    /// The grip's blend weight `w` at the episode's `step`-th control step (1, 2, ...):
+    /// `min(w, step * grip_ramp)` with the ramp on, `w` without it.
+    pub fn ramped_grip(&self, w: f64, step: usize) -> f64 {
+        if self.grip_ramp > 0.0 {
+            w.min(step as f64 * self.grip_ramp)
+        } else {
+            w
+        }
     }
 }
 
@@ -79,6 +101,8 @@ impl Default for ActionConfig {
             wrist_scale: 0.05,
             anchor: Anchor::Measured,
             grip_scale: 0.0,
+            grip_ramp: 0.0,
+            grip_ramp_in_training: true,
         }
     }
 }
@@ -135,8 +159,10 @@ pub fn component_std(model: &SynergyModel) -> Vec<f64> {
 /// anchor posture `q` (paper order; see [`Anchor`]): the fingers by eq. 2,
 /// `P^-1(d_eps + P(theta_f))` made feasible for `finger_limits`, the wrist by
 /// `q_w + d_theta_w` clamped to `wrist_limits`; with the grip, the fingers blended towards
-/// `closed` (see [`ActionConfig::grip_scale`]). The environment and the robot pipeline
-/// both use this function, so a policy acts identically in both.
+/// `closed` (see [`ActionConfig::grip_scale`]), at most as far as the ramp allows at the
+/// episode's `step`-th control step (1, 2, ...; [`ActionConfig::grip_ramp`]). The
+/// environment and the robot pipeline both use this function, so a policy acts
+/// identically in both.
 #[allow(clippy::too_many_arguments)]
 pub fn hand_targets(
     cfg: &ActionConfig,
@@ -147,14 +173,16 @@ pub fn hand_targets(
     q: &[f64; 24],
     closed: &[f64; 24],
     raw: &[f32],
+    step: usize,
 ) -> [f64; 24] {
     let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
     let d = decode(cfg, std, raw, false);
     let mut target_f = model.target(&theta_f, &d.d_eps, finger_limits);
-    if d.grip > 0.0 {
+    let w = cfg.ramped_grip(d.grip, step);
+    if w > 0.0 {
         for (k, t) in target_f.iter_mut().enumerate() {
             let (lo, hi) = finger_limits[k];
-            *t = (*t + d.grip * (closed[k + 2] - *t)).clamp(lo, hi);
+            *t = (*t + w * (closed[k + 2] - *t)).clamp(lo, hi);
         }
     }
     let mut targets = [0.0; 24];
@@ -193,6 +221,7 @@ mod tests {
             &qw,
             &crate::sim::script::power_grasp(),
             &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
+            1,
         );
         assert_eq!(t[0], wl[0].1);
         assert!((t[1] - (qw[1] + 0.05)).abs() < 1e-12);
@@ -227,6 +256,7 @@ mod tests {
                 &q,
                 &closed,
                 &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, g],
+                1,
             )
         };
         let plain = hand_targets(
@@ -238,6 +268,7 @@ mod tests {
             &q,
             &closed,
             &[0.0; 7],
+            1,
         );
         // g <= 0: eq. 2 as without the grip; g = 1: the power grasp; g = 0.5: halfway.
         assert_eq!(at(-0.7), plain);
@@ -254,6 +285,52 @@ mod tests {
             );
         }
         assert_eq!(&full[..2], &plain[..2]);
+    }
+
+    #[test]
+    fn the_grip_ramp_caps_the_blend_per_step_hand_computed() {
+        let cfg = ActionConfig {
+            grip_scale: 0.25,
+            grip_ramp: 0.05,
+            ..ActionConfig::default()
+        };
+        // w = clip(g) * 0.25 = 0.25 for g = 1: capped at 0.05 at step 1, 0.10 at step 2,
+        // 0.20 at step 4, reached at step 5; a smaller w passes unchanged.
+        assert!((cfg.ramped_grip(0.25, 1) - 0.05).abs() < 1e-15);
+        assert!((cfg.ramped_grip(0.25, 2) - 0.10).abs() < 1e-15);
+        assert!((cfg.ramped_grip(0.25, 4) - 0.20).abs() < 1e-15);
+        assert_eq!(cfg.ramped_grip(0.25, 5), 0.25);
+        assert_eq!(cfg.ramped_grip(0.03, 1), 0.03);
+        assert_eq!(cfg.ramped_grip(0.0, 3), 0.0);
+        // Off: w at any step.
+        let off = ActionConfig {
+            grip_ramp: 0.0,
+            ..cfg.clone()
+        };
+        assert_eq!(off.ramped_grip(0.25, 1), 0.25);
+
+        // In hand_targets (values exact in binary): with the ramp at 0.125, g = 1 at step 1
+        // blends as g = 0.5 (w = 0.125) does unramped, and at step 2 as g = 1 (w = 0.25).
+        let cfg = ActionConfig {
+            grip_ramp: 0.125,
+            ..cfg
+        };
+        let model = crate::synergy::default_model().truncated(5).unwrap();
+        let std = component_std(&model);
+        let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
+        let fl = robot.finger_limits();
+        let hl = robot.hand_limits();
+        let wl = [hl[0], hl[1]];
+        let q = crate::robot::Posture::Open.angles();
+        let closed = crate::sim::script::power_grasp();
+        let at = |c: &ActionConfig, g: f32, step: usize| {
+            let mut raw = [0.0f32; 8];
+            raw[7] = g;
+            hand_targets(c, &std, &model, &fl, &wl, &q, &closed, &raw, step)
+        };
+        assert_eq!(at(&cfg, 1.0, 1), at(&off, 0.5, 1));
+        assert_eq!(at(&cfg, 1.0, 2), at(&off, 1.0, 2));
+        assert_ne!(at(&cfg, 1.0, 1), at(&off, 1.0, 1));
     }
 
     #[test]

@@ -174,6 +174,17 @@ impl EnvConfig {
             .with_critic_state(self.critic_state)
     }
 
+    /// The configuration of training's own episodes: this one, without the grip's ramp
+    /// where `action.grip_ramp_in_training` is false (the checkpoints keep this
+    /// configuration, so the policy acts with the ramp everywhere else).
+    pub fn for_training(&self) -> EnvConfig {
+        let mut c = self.clone();
+        if !c.action.grip_ramp_in_training {
+            c.action.grip_ramp = 0.0;
+        }
+        c
+    }
+
     /// Checks ranges; errors name the field.
     pub fn validate(&self) -> Result<Posture, GraspEnvError> {
         let bad = |field, message: String| Err(GraspEnvError::Config { field, message });
@@ -236,6 +247,21 @@ impl EnvConfig {
                     "{} is outside [0, 1]",
                     crate::util::num::short(self.action.grip_scale)
                 ),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.action.grip_ramp) {
+            return bad(
+                "action.grip_ramp",
+                format!(
+                    "{} is outside [0, 1]",
+                    crate::util::num::short(self.action.grip_ramp)
+                ),
+            );
+        }
+        if self.action.grip_ramp > 0.0 && self.action.grip_scale == 0.0 {
+            return bad(
+                "action.grip_ramp",
+                "ramps the grip, but the grip is off (set action.grip_scale > 0)".into(),
             );
         }
         if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {
@@ -894,6 +920,7 @@ impl GraspEnv {
             base,
             &self.closed,
             &a.cont,
+            self.steps + 1,
         );
         let target_f: [f64; 22] = std::array::from_fn(|k| targets[k + 2]);
         let before = self.sim.object_position();
@@ -1028,6 +1055,63 @@ mod tests {
     /// The default environment on the default box alone.
     fn box_env() -> GraspEnv {
         env_on(ObjectSpec::default_box())
+    }
+
+    #[test]
+    fn the_grip_ramp_counts_the_episodes_control_steps() {
+        // With the grip at full scale and the ramp at 0.125, the grip g = 1 at steps 1 and
+        // 2 commands what g = 0.125 and then g = 0.25 command without the ramp (exact in
+        // binary).
+        let env_with = |ramp: f64| {
+            let mut c = EnvConfig::default();
+            c.action.grip_scale = 1.0;
+            c.action.grip_ramp = ramp;
+            let mut env = GraspEnv::new(
+                &Robot::builtin(Side::Left),
+                vec![("box".to_string(), ObjectSpec::default_box())],
+                crate::synergy::default_model(),
+                SimConfig::default(),
+                c,
+            )
+            .expect("env");
+            env.reset(3);
+            env
+        };
+        let n = crate::synergy::default_model().n_components();
+        let grip = |g: f32| {
+            let mut cont = vec![0.0; n + 3];
+            cont[n + 2] = g;
+            Action { cont, lift: false }
+        };
+        let (mut ramped, mut plain, mut at_once) = (env_with(0.125), env_with(0.0), env_with(0.0));
+        for (k, g) in [0.125, 0.25].into_iter().enumerate() {
+            ramped.step(&grip(1.0));
+            plain.step(&grip(g));
+            at_once.step(&grip(1.0));
+            assert_eq!(ramped.sim.targets(), plain.sim.targets(), "step {}", k + 1);
+            assert_ne!(
+                ramped.sim.targets(),
+                at_once.sim.targets(),
+                "step {}",
+                k + 1
+            );
+        }
+    }
+
+    #[test]
+    fn training_drops_the_grip_ramp_only_where_asked() {
+        let mut c = EnvConfig::default();
+        c.action.grip_scale = 0.25;
+        c.action.grip_ramp = 0.15;
+        assert_eq!(c.for_training(), c);
+        c.action.grip_ramp_in_training = false;
+        let t = c.for_training();
+        assert_eq!(t.action.grip_ramp, 0.0);
+        assert_eq!(t.action.grip_scale, 0.25);
+        let mut back = t.clone();
+        back.action.grip_ramp = 0.15;
+        assert_eq!(back, c);
+        assert!(c.validate().is_ok() && t.validate().is_ok());
     }
 
     #[test]

@@ -981,6 +981,7 @@ fn stage2<B: HandArm>(
             env.action.anchor.pick(&m.raw.joint_angles, &at.last_sent),
             &closed,
             &a.cont,
+            steps,
         );
         m = at.command(&targets, logged, cfg.control_period_s)?;
         let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();

@@ -191,7 +191,7 @@ pub fn grasp_envs(
             objects.clone(),
             model.clone(),
             sim.clone(),
-            cfg.env.grasp.clone(),
+            cfg.env.grasp.for_training(),
         )?;
         envs.push(if on_stream { env.with_stream() } else { env });
     }
