@@ -505,6 +505,28 @@ fn grasp_run_ramps_the_grip_as_the_checkpoint_config_says() {
         let log = run_log(copy.to_str().unwrap(), &format!("ramp_{ramp}.jsonl"));
         assert_eq!(log == original, same, "grip_ramp = {ramp}");
     }
+    // `grasp eval` says how each checkpoint's grip acts.
+    let ramped = dir.path().join("ramp_0.01");
+    let out = grasp_cmd()
+        .args([
+            "eval",
+            "--objects",
+            "box_sugar",
+            "--trials",
+            "1",
+            "--policy",
+        ])
+        .arg(format!("{GRIP_POLICY},{},baseline1", ramped.display()))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains(&format!("evaluating {GRIP_POLICY} (grip 0.5) on 1 objects"))
+            && err.contains("(grip 0.5, ramped by 0.01 per step) on 1 objects")
+            && err.contains("evaluating Baseline 1 on 1 objects"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -603,6 +603,21 @@ fn ranker(
     }))
 }
 
+/// How a checkpoint's grip acts, for the progress line: "" without a grip, else its
+/// scale and ramp, e.g. " (grip 0.25, ramped by 0.15 per step)".
+fn grip_note(action: &grasp::env::action::ActionConfig) -> String {
+    use grasp::util::num::short;
+    match (action.grip_scale > 0.0, action.grip_ramp > 0.0) {
+        (false, _) => String::new(),
+        (true, false) => format!(" (grip {})", short(action.grip_scale)),
+        (true, true) => format!(
+            " (grip {}, ramped by {} per step)",
+            short(action.grip_scale),
+            short(action.grip_ramp)
+        ),
+    }
+}
+
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     check_flags(a)?;
     let specs = a
@@ -680,8 +695,9 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         }
         if !g.quiet {
             eprintln!(
-                "evaluating {} on {} objects x {} trials ...",
+                "evaluating {}{} on {} objects x {} trials ...",
                 ag.spec.label(),
+                grip_note(&ag.env.action),
                 names.len(),
                 a.trials
             );
