@@ -13,7 +13,7 @@ use grasp::run::calibrate::calibrate_tactile;
 use grasp::run::sim_backend::{SimBackendConfig, SimHandArm};
 use grasp::sim::{ObjectSpec, SimConfig};
 use nalgebra::Point3;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -423,6 +423,23 @@ fn the_m3g_policy_grasps_on_the_cameras_cloud_and_refuses_a_grasp_without_one() 
     assert!(err.contains("M3G") && err.contains("--cloud"), "{err}");
 }
 
+/// A copy of the grip policy in `copy` (created), its config's `grip_scale = 0.5` line
+/// replaced by `grip_line`.
+fn grip_policy_copy(copy: &Path, grip_line: &str) -> PathBuf {
+    std::fs::create_dir(copy).unwrap();
+    for f in ["checkpoint.safetensors", "synergy.json"] {
+        std::fs::copy(Path::new(GRIP_POLICY).join(f), copy.join(f)).unwrap();
+    }
+    let cfg = std::fs::read_to_string(Path::new(GRIP_POLICY).join("config.toml")).unwrap();
+    let edited = cfg.replace("grip_scale = 0.5", grip_line);
+    assert_ne!(
+        edited, cfg,
+        "{GRIP_POLICY}/config.toml has no `grip_scale = 0.5`"
+    );
+    std::fs::write(copy.join("config.toml"), edited).unwrap();
+    copy.to_path_buf()
+}
+
 #[test]
 fn the_grip_policy_grasps_and_a_config_without_its_grip_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -444,14 +461,7 @@ fn the_grip_policy_grasps_and_a_config_without_its_grip_is_refused() {
     }
     // The same network beside a config without the grip: 5 synergies and the wrist give 7
     // continuous actions, the network has 8.
-    let copy = dir.path().join("policy");
-    std::fs::create_dir(&copy).unwrap();
-    for f in ["checkpoint.safetensors", "synergy.json"] {
-        std::fs::copy(Path::new(GRIP_POLICY).join(f), copy.join(f)).unwrap();
-    }
-    let cfg = std::fs::read_to_string(Path::new(GRIP_POLICY).join("config.toml")).unwrap();
-    let cfg = cfg.replace("grip_scale = 0.5", "grip_scale = 0.0");
-    std::fs::write(copy.join("config.toml"), cfg).unwrap();
+    let copy = grip_policy_copy(&dir.path().join("policy"), "grip_scale = 0.0");
     let (ok, _, err) = run_json(&[
         "--policy",
         copy.to_str().unwrap(),
@@ -473,7 +483,6 @@ fn grasp_run_ramps_the_grip_as_the_checkpoint_config_says() {
     // of 1.0 caps nothing (w <= 0.5 < k), so the run is the original's line for line; a
     // ramp of 0.01 caps the grip from the first command, so the commands differ.
     let dir = tempfile::tempdir().unwrap();
-    let cfg = std::fs::read_to_string(Path::new(GRIP_POLICY).join("config.toml")).unwrap();
     let run_log = |policy: &str, name: &str| {
         let log = dir.path().join(name);
         let (ok, _, err) = run_json(&[
@@ -491,17 +500,10 @@ fn grasp_run_ramps_the_grip_as_the_checkpoint_config_says() {
     };
     let original = run_log(GRIP_POLICY, "original.jsonl");
     for (ramp, same) in [("1.0", true), ("0.01", false)] {
-        let copy = dir.path().join(format!("ramp_{ramp}"));
-        std::fs::create_dir(&copy).unwrap();
-        for f in ["checkpoint.safetensors", "synergy.json"] {
-            std::fs::copy(Path::new(GRIP_POLICY).join(f), copy.join(f)).unwrap();
-        }
-        let ramped = cfg.replace(
-            "grip_scale = 0.5",
+        let copy = grip_policy_copy(
+            &dir.path().join(format!("ramp_{ramp}")),
             &format!("grip_scale = 0.5\ngrip_ramp = {ramp}"),
         );
-        assert_ne!(ramped, cfg);
-        std::fs::write(copy.join("config.toml"), ramped).unwrap();
         let log = run_log(copy.to_str().unwrap(), &format!("ramp_{ramp}.jsonl"));
         assert_eq!(log == original, same, "grip_ramp = {ramp}");
     }

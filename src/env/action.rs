@@ -197,79 +197,77 @@ pub fn hand_targets(
 mod tests {
     use super::*;
 
+    /// The first 5 components of the shipped synergy model and the left hand's limits, for
+    /// [`hand_targets`] from one posture.
+    struct Hand {
+        model: SynergyModel,
+        std: Vec<f64>,
+        fl: [(f64, f64); 22],
+        wl: [(f64, f64); 2],
+        closed: [f64; 24],
+    }
+
+    impl Hand {
+        fn new() -> Hand {
+            let model = crate::synergy::default_model().truncated(5).unwrap();
+            let std = component_std(&model);
+            let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
+            let hl = robot.hand_limits();
+            Hand {
+                std,
+                model,
+                fl: robot.finger_limits(),
+                wl: [hl[0], hl[1]],
+                closed: crate::sim::script::power_grasp(),
+            }
+        }
+
+        /// [`hand_targets`] of `raw` from `q` at control step `step`.
+        fn targets(
+            &self,
+            cfg: &ActionConfig,
+            q: &[f64; 24],
+            raw: &[f32],
+            step: usize,
+        ) -> [f64; 24] {
+            let (m, fl, wl) = (&self.model, &self.fl, &self.wl);
+            hand_targets(cfg, &self.std, m, fl, wl, q, &self.closed, raw, step)
+        }
+    }
+
     #[test]
     fn hand_targets_zero_action_projects_and_wrist_increments_clamp() {
-        let model = crate::synergy::default_model().truncated(5).unwrap();
-        let std = component_std(&model);
+        let h = Hand::new();
+        let (std, wl) = (&h.std, h.wl);
         assert_eq!(std.len(), 5);
-        assert!((std[0] - model.eigenvalues()[0].sqrt()).abs() < 1e-15);
-        let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
-        let fl = robot.finger_limits();
-        let hl = robot.hand_limits();
-        let wl = [hl[0], hl[1]];
+        assert!((std[0] - h.model.eigenvalues()[0].sqrt()).abs() < 1e-15);
         let q = crate::robot::Posture::CShape.angles();
         // Zero synergy increments: the fingers go to the feasible projection of theta_f;
         // wrist increments of +1 unit = +0.05 rad, WRJ2 clamped at its upper limit.
         let mut qw = q;
         qw[0] = wl[0].1 - 0.01;
-        let t = hand_targets(
-            &ActionConfig::default(),
-            &std,
-            &model,
-            &fl,
-            &wl,
-            &qw,
-            &crate::sim::script::power_grasp(),
-            &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
-            1,
-        );
+        let raw = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0];
+        let t = h.targets(&ActionConfig::default(), &qw, &raw, 1);
         assert_eq!(t[0], wl[0].1);
         assert!((t[1] - (qw[1] + 0.05)).abs() < 1e-12);
         let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
-        let expect = model.target(&theta_f, &[0.0; 5], &fl);
+        let expect = h.model.target(&theta_f, &[0.0; 5], &h.fl);
         assert_eq!(&t[2..], &expect[..]);
     }
 
     #[test]
     fn the_grip_blends_the_fingers_towards_the_power_grasp() {
-        let model = crate::synergy::default_model().truncated(5).unwrap();
-        let std = component_std(&model);
-        let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
-        let fl = robot.finger_limits();
-        let hl = robot.hand_limits();
-        let wl = [hl[0], hl[1]];
+        let h = Hand::new();
+        let (fl, closed) = (&h.fl, &h.closed);
         let q = crate::robot::Posture::Open.angles();
-        let closed = crate::sim::script::power_grasp();
         let cfg = ActionConfig {
             grip_scale: 1.0,
             ..ActionConfig::default()
         };
         assert_eq!(cfg.continuous(5), 8);
         assert_eq!(ActionConfig::default().continuous(5), 7);
-        let at = |g: f32| {
-            hand_targets(
-                &cfg,
-                &std,
-                &model,
-                &fl,
-                &wl,
-                &q,
-                &closed,
-                &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, g],
-                1,
-            )
-        };
-        let plain = hand_targets(
-            &ActionConfig::default(),
-            &std,
-            &model,
-            &fl,
-            &wl,
-            &q,
-            &closed,
-            &[0.0; 7],
-            1,
-        );
+        let at = |g: f32| h.targets(&cfg, &q, &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, g], 1);
+        let plain = h.targets(&ActionConfig::default(), &q, &[0.0; 7], 1);
         // g <= 0: eq. 2 as without the grip; g = 1: the power grasp; g = 0.5: halfway.
         assert_eq!(at(-0.7), plain);
         let full = at(1.0);
@@ -315,18 +313,12 @@ mod tests {
             grip_ramp: 0.125,
             ..cfg
         };
-        let model = crate::synergy::default_model().truncated(5).unwrap();
-        let std = component_std(&model);
-        let robot = crate::robot::Robot::builtin(crate::robot::Side::Left);
-        let fl = robot.finger_limits();
-        let hl = robot.hand_limits();
-        let wl = [hl[0], hl[1]];
+        let h = Hand::new();
         let q = crate::robot::Posture::Open.angles();
-        let closed = crate::sim::script::power_grasp();
         let at = |c: &ActionConfig, g: f32, step: usize| {
             let mut raw = [0.0f32; 8];
             raw[7] = g;
-            hand_targets(c, &std, &model, &fl, &wl, &q, &closed, &raw, step)
+            h.targets(c, &q, &raw, step)
         };
         assert_eq!(at(&cfg, 1.0, 1), at(&off, 0.5, 1));
         assert_eq!(at(&cfg, 1.0, 2), at(&off, 1.0, 2));

@@ -1042,12 +1042,17 @@ mod tests {
 
     /// The default environment on `object` alone (named "box").
     pub(super) fn env_on(object: ObjectSpec) -> GraspEnv {
+        env_with(object, EnvConfig::default())
+    }
+
+    /// The environment of `cfg` on `object` alone (named "box").
+    fn env_with(object: ObjectSpec, cfg: EnvConfig) -> GraspEnv {
         GraspEnv::new(
             &Robot::builtin(Side::Left),
             vec![("box".to_string(), object)],
             crate::synergy::default_model(),
             SimConfig::default(),
-            EnvConfig::default(),
+            cfg,
         )
         .expect("env")
     }
@@ -1062,18 +1067,11 @@ mod tests {
         // With the grip at full scale and the ramp at 0.125, the grip g = 1 at steps 1 and
         // 2 commands what g = 0.125 and then g = 0.25 command without the ramp (exact in
         // binary).
-        let env_with = |ramp: f64| {
+        let ramped_by = |ramp: f64| {
             let mut c = EnvConfig::default();
             c.action.grip_scale = 1.0;
             c.action.grip_ramp = ramp;
-            let mut env = GraspEnv::new(
-                &Robot::builtin(Side::Left),
-                vec![("box".to_string(), ObjectSpec::default_box())],
-                crate::synergy::default_model(),
-                SimConfig::default(),
-                c,
-            )
-            .expect("env");
+            let mut env = env_with(ObjectSpec::default_box(), c);
             env.reset(3);
             env
         };
@@ -1083,7 +1081,8 @@ mod tests {
             cont[n + 2] = g;
             Action { cont, lift: false }
         };
-        let (mut ramped, mut plain, mut at_once) = (env_with(0.125), env_with(0.0), env_with(0.0));
+        let (mut ramped, mut plain, mut at_once) =
+            (ramped_by(0.125), ramped_by(0.0), ramped_by(0.0));
         for (k, g) in [0.125, 0.25].into_iter().enumerate() {
             ramped.step(&grip(1.0));
             plain.step(&grip(g));
