@@ -151,24 +151,18 @@ impl EnvConfig {
         if self.max_steps == 0 {
             return bad("max_steps", "must be at least 1".into());
         }
-        if !(self.grasp_depth.is_finite() && (0.0..=0.2).contains(&self.grasp_depth)) {
-            return bad(
-                "grasp_depth",
-                format!(
-                    "{} is outside [0, 0.2] m",
-                    crate::util::num::short(self.grasp_depth)
-                ),
-            );
-        }
-        if !(self.closing_time > 0.0 && self.closing_time <= 10.0) {
-            return bad(
-                "closing_time",
-                format!(
-                    "{} is outside (0, 10] s",
-                    crate::util::num::short(self.closing_time)
-                ),
-            );
-        }
+        within(
+            "grasp_depth",
+            self.grasp_depth,
+            self.grasp_depth.is_finite() && (0.0..=0.2).contains(&self.grasp_depth),
+            "[0, 0.2] m",
+        )?;
+        within(
+            "closing_time",
+            self.closing_time,
+            self.closing_time > 0.0 && self.closing_time <= 10.0,
+            "(0, 10] s",
+        )?;
         // At least 1 ms: a tiny period passes `> 0` but never finishes stage 1.
         if !(self.closing_period >= 1e-3 && self.closing_period <= self.closing_time) {
             return bad(
@@ -179,42 +173,30 @@ impl EnvConfig {
                 ),
             );
         }
-        if !(self.action.eps_scale > 0.0 && self.action.eps_scale <= 5.0) {
-            return bad(
-                "action.eps_scale",
-                format!(
-                    "{} is outside (0, 5]",
-                    crate::util::num::short(self.action.eps_scale)
-                ),
-            );
-        }
-        if !(self.action.wrist_scale >= 0.0 && self.action.wrist_scale <= 0.5) {
-            return bad(
-                "action.wrist_scale",
-                format!(
-                    "{} is outside [0, 0.5] rad",
-                    crate::util::num::short(self.action.wrist_scale)
-                ),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.action.grip_scale) {
-            return bad(
-                "action.grip_scale",
-                format!(
-                    "{} is outside [0, 1]",
-                    crate::util::num::short(self.action.grip_scale)
-                ),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.action.grip_ramp) {
-            return bad(
-                "action.grip_ramp",
-                format!(
-                    "{} is outside [0, 1]",
-                    crate::util::num::short(self.action.grip_ramp)
-                ),
-            );
-        }
+        within(
+            "action.eps_scale",
+            self.action.eps_scale,
+            self.action.eps_scale > 0.0 && self.action.eps_scale <= 5.0,
+            "(0, 5]",
+        )?;
+        within(
+            "action.wrist_scale",
+            self.action.wrist_scale,
+            self.action.wrist_scale >= 0.0 && self.action.wrist_scale <= 0.5,
+            "[0, 0.5] rad",
+        )?;
+        within(
+            "action.grip_scale",
+            self.action.grip_scale,
+            (0.0..=1.0).contains(&self.action.grip_scale),
+            "[0, 1]",
+        )?;
+        within(
+            "action.grip_ramp",
+            self.action.grip_ramp,
+            (0.0..=1.0).contains(&self.action.grip_ramp),
+            "[0, 1]",
+        )?;
         if self.action.grip_ramp > 0.0 && self.action.grip_scale == 0.0 {
             return bad(
                 "action.grip_ramp",
@@ -249,5 +231,17 @@ impl EnvConfig {
                 format!("unknown posture '{other}': expected open or c-shape"),
             ),
         }
+    }
+}
+
+/// `Ok` when `ok`, else the error naming `field`: "`value` is outside `range`".
+fn within(field: &'static str, value: f64, ok: bool, range: &str) -> Result<(), GraspEnvError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(GraspEnvError::Config {
+            field,
+            message: format!("{} is outside {range}", crate::util::num::short(value)),
+        })
     }
 }
