@@ -711,6 +711,18 @@ mod tests {
                 "action.grip_ramp: ramps the grip, but the grip is off",
             ),
             (
+                "[env.action]\ngrip_scale = 0.0\ngrip_delay = 1\n",
+                "action.grip_delay: delays the grip, but the grip is off",
+            ),
+            (
+                "[env]\nmax_steps = 5\n[env.action]\ngrip_scale = 0.25\ngrip_delay = 5\n",
+                "action.grip_delay: 5 steps leave no step with the grip: must be below max_steps (5)",
+            ),
+            (
+                "[env.action]\ngrip_scale = 0.25\ngrip_delay = -1\n",
+                "line 3, column 14: invalid value: integer `-1`",
+            ),
+            (
                 "[env.reward]\ndisplacement_weight = -1.0\n",
                 "reward.displacement_weight",
             ),

@@ -604,18 +604,26 @@ fn ranker(
 }
 
 /// How a checkpoint's grip acts, for the progress line: "" without a grip, else its
-/// scale and ramp, e.g. " (grip 0.25, ramped by 0.15 per step)".
+/// scale, delay and ramp, e.g. " (grip 0.25, ramped by 0.15 per step)" or " (grip 0.25,
+/// off for the first 1 step)".
 fn grip_note(action: &grasp::env::action::ActionConfig) -> String {
     use grasp::util::num::short;
-    match (action.grip_scale > 0.0, action.grip_ramp > 0.0) {
-        (false, _) => String::new(),
-        (true, false) => format!(" (grip {})", short(action.grip_scale)),
-        (true, true) => format!(
-            " (grip {}, ramped by {} per step)",
-            short(action.grip_scale),
-            short(action.grip_ramp)
-        ),
+    if action.grip_scale <= 0.0 {
+        return String::new();
     }
+    let mut note = format!(" (grip {}", short(action.grip_scale));
+    if action.grip_delay > 0 {
+        let steps = if action.grip_delay == 1 {
+            "step"
+        } else {
+            "steps"
+        };
+        note += &format!(", off for the first {} {steps}", action.grip_delay);
+    }
+    if action.grip_ramp > 0.0 {
+        note += &format!(", ramped by {} per step", short(action.grip_ramp));
+    }
+    note + ")"
 }
 
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
@@ -848,4 +856,26 @@ fn lift_line(r: &grasp::eval::AgentResult) -> String {
         l.mean_grip_held,
         l.mean_grip_dropped
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::grip_note;
+    use grasp::env::action::ActionConfig;
+
+    #[test]
+    fn the_grip_note_names_the_scale_the_delay_and_the_ramp() {
+        let mut a = ActionConfig::default();
+        assert_eq!(grip_note(&a), "");
+        a.grip_scale = 0.25;
+        assert_eq!(grip_note(&a), " (grip 0.25)");
+        a.grip_delay = 1;
+        assert_eq!(grip_note(&a), " (grip 0.25, off for the first 1 step)");
+        a.grip_delay = 2;
+        a.grip_ramp = 0.15;
+        assert_eq!(
+            grip_note(&a),
+            " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step)"
+        );
+    }
 }

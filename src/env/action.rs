@@ -69,10 +69,15 @@ pub struct ActionConfig {
     /// `grip_scale / grip_ramp` steps instead of at once ([`ActionConfig::ramped_grip`]).
     /// Needs the grip (`grip_scale > 0`). In [0, 1].
     pub grip_ramp: f64,
-    /// Whether training's own episodes ramp the grip too (default true). With false the
-    /// policy trains with the grip at once (`grasp train`, and the Python module, whose
-    /// environments are training's) and the ramp applies where the checkpoint acts
-    /// afterwards: `grasp eval`, `grasp run`, `grasp rollout` (see
+    /// Beyond the paper (0: off): control steps at the start of the episode (of an
+    /// attempt, after a retry) during which the grip stays off (`w = 0`); the ramp, if
+    /// any, counts from the step after ([`ActionConfig::ramped_grip`]). Needs the grip;
+    /// below the episode's `max_steps`.
+    pub grip_delay: usize,
+    /// Whether training's own episodes ramp and delay the grip too (default true). With
+    /// false the policy trains with the grip at once (`grasp train`, and the Python
+    /// module, whose environments are training's) and the ramp and the delay apply where
+    /// the checkpoint acts afterwards: `grasp eval`, `grasp run`, `grasp rollout` (see
     /// [`crate::env::grasp::EnvConfig::for_training`]).
     pub grip_ramp_in_training: bool,
 }
@@ -84,10 +89,13 @@ impl ActionConfig {
     }
 
     /// The grip's blend weight `w` at the episode's `step`-th control step (1, 2, ...):
-    /// `min(w, step * grip_ramp)` with the ramp on, `w` without it.
+    /// 0 while `step <= grip_delay`, then `min(w, (step - grip_delay) * grip_ramp)` with
+    /// the ramp on, `w` without it.
     pub fn ramped_grip(&self, w: f64, step: usize) -> f64 {
-        if self.grip_ramp > 0.0 {
-            w.min(step as f64 * self.grip_ramp)
+        if step <= self.grip_delay {
+            0.0
+        } else if self.grip_ramp > 0.0 {
+            w.min((step - self.grip_delay) as f64 * self.grip_ramp)
         } else {
             w
         }
@@ -102,6 +110,7 @@ impl Default for ActionConfig {
             anchor: Anchor::Measured,
             grip_scale: 0.0,
             grip_ramp: 0.0,
+            grip_delay: 0,
             grip_ramp_in_training: true,
         }
     }
@@ -323,6 +332,45 @@ mod tests {
         assert_eq!(at(&cfg, 1.0, 1), at(&off, 0.5, 1));
         assert_eq!(at(&cfg, 1.0, 2), at(&off, 1.0, 2));
         assert_ne!(at(&cfg, 1.0, 1), at(&off, 1.0, 1));
+    }
+
+    #[test]
+    fn the_grip_delay_holds_the_grip_off_then_the_ramp_counts_on_hand_computed() {
+        let delayed = ActionConfig {
+            grip_scale: 0.25,
+            grip_delay: 1,
+            ..ActionConfig::default()
+        };
+        // Delay 1, no ramp: off at step 1, whole from step 2.
+        assert_eq!(delayed.ramped_grip(0.25, 1), 0.0);
+        assert_eq!(delayed.ramped_grip(0.25, 2), 0.25);
+        assert_eq!(delayed.ramped_grip(0.1, 7), 0.1);
+        // Delay 2 with the ramp at 0.125: off at steps 1-2, 0.125 at step 3, 0.25 at 4.
+        let both = ActionConfig {
+            grip_delay: 2,
+            grip_ramp: 0.125,
+            ..delayed.clone()
+        };
+        assert_eq!(both.ramped_grip(0.25, 2), 0.0);
+        assert_eq!(both.ramped_grip(0.25, 3), 0.125);
+        assert_eq!(both.ramped_grip(0.25, 4), 0.25);
+
+        // In hand_targets: g = 1 at step 1 with the delay moves the fingers as g = 0 does,
+        // and at step 2 as g = 1 without it.
+        let off = ActionConfig {
+            grip_delay: 0,
+            ..delayed.clone()
+        };
+        let h = Hand::new();
+        let q = crate::robot::Posture::Open.angles();
+        let at = |c: &ActionConfig, g: f32, step: usize| {
+            let mut raw = [0.0f32; 8];
+            raw[7] = g;
+            h.targets(c, &q, &raw, step)
+        };
+        assert_eq!(at(&delayed, 1.0, 1), at(&off, 0.0, 1));
+        assert_eq!(at(&delayed, 1.0, 2), at(&off, 1.0, 2));
+        assert_ne!(at(&delayed, 1.0, 1), at(&off, 1.0, 1));
     }
 
     #[test]

@@ -866,13 +866,15 @@ mod tests {
         let mut c = EnvConfig::default();
         c.action.grip_scale = 0.25;
         c.action.grip_ramp = 0.15;
+        c.action.grip_delay = 1;
         assert_eq!(c.for_training(), c);
         c.action.grip_ramp_in_training = false;
         let t = c.for_training();
-        assert_eq!(t.action.grip_ramp, 0.0);
+        assert_eq!((t.action.grip_ramp, t.action.grip_delay), (0.0, 0));
         assert_eq!(t.action.grip_scale, 0.25);
         let mut back = t.clone();
         back.action.grip_ramp = 0.15;
+        back.action.grip_delay = 1;
         assert_eq!(back, c);
         assert!(c.validate().is_ok() && t.validate().is_ok());
     }

@@ -132,12 +132,13 @@ impl EnvConfig {
     }
 
     /// The configuration of training's own episodes: this one, without the grip's ramp
-    /// where `action.grip_ramp_in_training` is false (the checkpoints keep this
-    /// configuration, so the policy acts with the ramp everywhere else).
+    /// and delay where `action.grip_ramp_in_training` is false (the checkpoints keep
+    /// this configuration, so the policy acts with them everywhere else).
     pub fn for_training(&self) -> EnvConfig {
         let mut c = self.clone();
         if !c.action.grip_ramp_in_training {
             c.action.grip_ramp = 0.0;
+            c.action.grip_delay = 0;
         }
         c
     }
@@ -201,6 +202,21 @@ impl EnvConfig {
             return bad(
                 "action.grip_ramp",
                 "ramps the grip, but the grip is off (set action.grip_scale > 0)".into(),
+            );
+        }
+        if self.action.grip_delay > 0 && self.action.grip_scale == 0.0 {
+            return bad(
+                "action.grip_delay",
+                "delays the grip, but the grip is off (set action.grip_scale > 0)".into(),
+            );
+        }
+        if self.action.grip_delay >= self.max_steps {
+            return bad(
+                "action.grip_delay",
+                format!(
+                    "{} steps leave no step with the grip: must be below max_steps ({})",
+                    self.action.grip_delay, self.max_steps
+                ),
             );
         }
         if !(0.0..=1.0).contains(&self.curriculum.fixed_rate) {
