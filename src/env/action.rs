@@ -242,6 +242,14 @@ mod tests {
             let (m, fl, wl) = (&self.model, &self.fl, &self.wl);
             hand_targets(cfg, &self.std, m, fl, wl, q, &self.closed, raw, step)
         }
+
+        /// [`Hand::targets`] from the open hand of the action that is all zero but the
+        /// grip `g` (5 synergies, so the grip is the 8th output).
+        fn gripped(&self, cfg: &ActionConfig, g: f32, step: usize) -> [f64; 24] {
+            let mut raw = [0.0f32; 8];
+            raw[7] = g;
+            self.targets(cfg, &crate::robot::Posture::Open.angles(), &raw, step)
+        }
     }
 
     #[test]
@@ -275,7 +283,7 @@ mod tests {
         };
         assert_eq!(cfg.continuous(5), 8);
         assert_eq!(ActionConfig::default().continuous(5), 7);
-        let at = |g: f32| h.targets(&cfg, &q, &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, g], 1);
+        let at = |g: f32| h.gripped(&cfg, g, 1);
         let plain = h.targets(&ActionConfig::default(), &q, &[0.0; 7], 1);
         // g <= 0: eq. 2 as without the grip; g = 1: the power grasp; g = 0.5: halfway.
         assert_eq!(at(-0.7), plain);
@@ -323,15 +331,9 @@ mod tests {
             ..cfg
         };
         let h = Hand::new();
-        let q = crate::robot::Posture::Open.angles();
-        let at = |c: &ActionConfig, g: f32, step: usize| {
-            let mut raw = [0.0f32; 8];
-            raw[7] = g;
-            h.targets(c, &q, &raw, step)
-        };
-        assert_eq!(at(&cfg, 1.0, 1), at(&off, 0.5, 1));
-        assert_eq!(at(&cfg, 1.0, 2), at(&off, 1.0, 2));
-        assert_ne!(at(&cfg, 1.0, 1), at(&off, 1.0, 1));
+        assert_eq!(h.gripped(&cfg, 1.0, 1), h.gripped(&off, 0.5, 1));
+        assert_eq!(h.gripped(&cfg, 1.0, 2), h.gripped(&off, 1.0, 2));
+        assert_ne!(h.gripped(&cfg, 1.0, 1), h.gripped(&off, 1.0, 1));
     }
 
     #[test]
@@ -362,15 +364,9 @@ mod tests {
             ..delayed.clone()
         };
         let h = Hand::new();
-        let q = crate::robot::Posture::Open.angles();
-        let at = |c: &ActionConfig, g: f32, step: usize| {
-            let mut raw = [0.0f32; 8];
-            raw[7] = g;
-            h.targets(c, &q, &raw, step)
-        };
-        assert_eq!(at(&delayed, 1.0, 1), at(&off, 0.0, 1));
-        assert_eq!(at(&delayed, 1.0, 2), at(&off, 1.0, 2));
-        assert_ne!(at(&delayed, 1.0, 1), at(&off, 1.0, 1));
+        assert_eq!(h.gripped(&delayed, 1.0, 1), h.gripped(&off, 0.0, 1));
+        assert_eq!(h.gripped(&delayed, 1.0, 2), h.gripped(&off, 1.0, 2));
+        assert_ne!(h.gripped(&delayed, 1.0, 1), h.gripped(&off, 1.0, 1));
     }
 
     #[test]
