@@ -458,3 +458,58 @@ fn a_failed_trial_is_retried_where_the_object_came_to_rest() {
         "{err}"
     );
 }
+
+#[test]
+fn failed_lifts_are_told_apart_by_where_the_object_ended_and_how_it_turned() {
+    // Traced (docs/results/procmix_2026_12/README.md): lifted from the top-down placement
+    // over its centre, the novel wedge pivots about the fingers (baseline 1, seed 0: 0 of
+    // 4 held, turned by 0.0-1.8 rad, median 53 degrees); the soup can is held (4 of 4,
+    // turned by 0.08-0.29 rad).
+    let check = |object: &str| {
+        let v = baseline1_eval(object, "4", None);
+        let o = v[0]["objects"][0].clone();
+        let count = |k: &str| o[k].as_u64().unwrap();
+        let floats = |k: &str| -> Vec<f64> {
+            o[k].as_array()
+                .unwrap()
+                .iter()
+                .map(|h| h.as_f64().unwrap())
+                .collect()
+        };
+        let (heights, turns) = (floats("lift_heights"), floats("lift_turns"));
+        assert_eq!((heights.len(), turns.len()), (4, 4));
+        // Baseline 1 lifts in every episode: each trial is a success or one of the two
+        // kinds of failed lift (or a physics failure).
+        assert_eq!(
+            count("successes")
+                + count("failed_in_hand")
+                + count("failed_out_of_hand")
+                + count("physics_failures"),
+            4,
+            "{o}"
+        );
+        for (ok, h) in o["outcomes"].as_array().unwrap().iter().zip(&heights) {
+            if ok.as_bool().unwrap() {
+                assert!(*h >= 0.10, "a success at {h} m");
+            }
+        }
+        let lifts = &v[0]["lifts"];
+        assert_eq!(lifts["failed_in_hand"], o["failed_in_hand"]);
+        assert_eq!(lifts["failed_out_of_hand"], o["failed_out_of_hand"]);
+        (count("successes"), lifts.clone())
+    };
+    let (held, wedge) = check("assets/meshes/novel/wedge.obj");
+    assert!(held < 4);
+    let failed_turn = wedge["median_turn_failed_deg"].as_f64().unwrap();
+    assert!(
+        failed_turn > 30.0,
+        "the wedge turned by a median {failed_turn} deg"
+    );
+    let (held, can) = check("can_soup");
+    assert!(held >= 3);
+    let held_turn = can["median_turn_held_deg"].as_f64().unwrap();
+    assert!(
+        held_turn < 20.0,
+        "the can turned by a median {held_turn} deg"
+    );
+}

@@ -51,7 +51,9 @@ class GraspEnv(gym.Env):
     cut short: the learner should not bootstrap from it); at the end of an episode also
     ``success`` and ``is_success`` (the object was held after the lift) and ``summary``
     (the summary: object, success, steps, episode_return, lifted, physics_failure,
-    touched_in_stage1, thumb_contact_at_lift, grip_effort).
+    touched_in_stage1, thumb_contact_at_lift, grip_effort, object_height: the object's
+    lowest point above the table when the lift was judged, in_hand: it touched the hand then,
+    object_turn: how far it turned during the lift, rad).
     """
 
     metadata = {"render_modes": []}

@@ -843,18 +843,25 @@ fn retry_line(r: &AgentResult) -> Option<String> {
     ))
 }
 
-/// One line on how an agent's lifts were made: thumb contact and grip.
+/// One line on how an agent's lifts were made: thumb contact and grip, and how the failed
+/// lifts ended.
 fn lift_line(r: &grasp::eval::AgentResult) -> String {
     let l = &r.lifts;
     format!(
         "{}: {} lifts, thumb touching at {:.1} % of them; grip through the lift {:.2} N m \
-         (held {:.2}, dropped {:.2})\n",
+         (held {:.2}, dropped {:.2}); failed lifts: {} with the object still in the hand, \
+         too low, {} with it out of the hand; the object turned by a median {:.0} deg in \
+         the lifts that held it, {:.0} deg in those that failed\n",
         r.agent,
         l.lifted,
         100.0 * l.thumb_contact_rate,
         l.mean_grip_effort,
         l.mean_grip_held,
-        l.mean_grip_dropped
+        l.mean_grip_dropped,
+        l.failed_in_hand,
+        l.failed_out_of_hand,
+        l.median_turn_held_deg,
+        l.median_turn_failed_deg
     )
 }
 

@@ -88,6 +88,46 @@ pub struct EpisodeSummary {
     /// The grip held through the lift: the 22 finger joints' absolute PD efforts summed
     /// and averaged over the lift (N m; 0 when the episode did not lift).
     pub grip_effort: f64,
+    /// The object's lowest point above the table top when the lift was judged (m; 0 when
+    /// the episode did not lift). A lift succeeds from `lift.success_height` up.
+    pub object_height: f64,
+    /// The object touched the hand when the lift was judged (false when the episode did
+    /// not lift). A failed lift with the object still in the hand held it too low: tipped,
+    /// pivoting or slipping in the grasp.
+    pub in_hand: bool,
+    /// How far the object turned during the lift (rad; 0 when the episode did not lift):
+    /// large when it tipped, pivoted about the fingers or swung in the grasp.
+    pub object_turn: f64,
+}
+
+impl EpisodeSummary {
+    /// A lift that failed with the object still touching the hand, below the success
+    /// height (no physics failure): the grasp held the object but tipped it, let it pivot
+    /// or slip. See [`Self::failed_out_of_hand`] for the other failed lifts.
+    pub fn failed_in_hand(&self) -> bool {
+        self.lifted && !self.success && !self.physics_failure && self.in_hand
+    }
+
+    /// A lift that failed with the object out of the hand when it was judged (no physics
+    /// failure): dropped, or never picked up.
+    pub fn failed_out_of_hand(&self) -> bool {
+        self.lifted && !self.success && !self.physics_failure && !self.in_hand
+    }
+}
+
+/// What an episode's lift left for its summary.
+#[derive(Debug, Clone, Copy)]
+struct LiftRecord {
+    /// The thumb's tactile bit when the lift began.
+    thumb: bool,
+    /// The grip held through the lift (N m).
+    grip: f64,
+    /// The object's lowest point above the table when judged (m).
+    height: f64,
+    /// The object touched the hand when judged.
+    in_hand: bool,
+    /// How far the object turned during the lift (rad).
+    turn: f64,
 }
 
 /// The grasping environment for one simulated hand.
@@ -121,9 +161,8 @@ pub struct GraspEnv {
     steps: usize,
     episode_return: f64,
     touched_in_stage1: bool,
-    /// (thumb tactile bit at the lift's start, grip effort through the lift) of the
-    /// episode's lift, once it lifted.
-    lift_grip: Option<(bool, f64)>,
+    /// The episode's lift, once it lifted.
+    lift_record: Option<LiftRecord>,
     last: Option<EpisodeSummary>,
     /// Physics steps and wall time per episode phase, over all episodes.
     phases: PhaseTally,
@@ -189,7 +228,7 @@ impl GraspEnv {
             steps: 0,
             episode_return: 0.0,
             touched_in_stage1: false,
-            lift_grip: None,
+            lift_record: None,
             last: None,
             phases: PhaseTally::default(),
             pregrasp,
@@ -334,7 +373,7 @@ impl GraspEnv {
         self.steps = 0;
         self.episode_return = 0.0;
         self.touched_in_stage1 = false;
-        self.lift_grip = None;
+        self.lift_record = None;
         self.done = false;
         Ok(())
     }
@@ -485,8 +524,11 @@ impl GraspEnv {
             deepest_contact: self.sim.deepest_contact().map_or(0.0, |c| c.depth),
             deepest_contact_with: self.sim.deepest_contact().map(|c| c.with.clone()),
             touched_in_stage1: self.touched_in_stage1,
-            thumb_contact_at_lift: self.lift_grip.is_some_and(|g| g.0),
-            grip_effort: self.lift_grip.map_or(0.0, |g| g.1),
+            thumb_contact_at_lift: self.lift_record.is_some_and(|g| g.thumb),
+            grip_effort: self.lift_record.map_or(0.0, |g| g.grip),
+            object_height: self.lift_record.map_or(0.0, |g| g.height),
+            in_hand: self.lift_record.is_some_and(|g| g.in_hand),
+            object_turn: self.lift_record.map_or(0.0, |g| g.turn),
         });
         self.done = true;
     }
@@ -512,7 +554,13 @@ impl GraspEnv {
         let (t, before) = (Instant::now(), self.sim.physics_steps());
         let out = self.sim.lift_and_judge();
         self.phases.lift.add(self.sim.physics_steps() - before, t);
-        self.lift_grip = Some((thumb, out.grip_effort));
+        self.lift_record = Some(LiftRecord {
+            thumb,
+            grip: out.grip_effort,
+            height: out.object_lowest_z,
+            in_hand: out.in_contact,
+            turn: out.object_turn,
+        });
         out
     }
 
@@ -555,7 +603,7 @@ impl GraspEnv {
             });
             self.steps = 0;
             self.episode_return = 0.0;
-            self.lift_grip = None;
+            self.lift_record = None;
             self.finish(false, false, true);
             return Ok(self.last.clone().unwrap_or_else(|| unreachable!()));
         }
@@ -631,7 +679,7 @@ impl Env for GraspEnv {
             self.steps = 0;
             self.episode_return = 0.0;
             self.touched_in_stage1 = false;
-            self.lift_grip = None;
+            self.lift_record = None;
             self.done = false;
             return self.observation();
         }

@@ -231,6 +231,23 @@ pub struct ObjectResult {
     /// for one attempt per trial).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub attempts: Vec<usize>,
+    /// Failed lifts with the object still in the hand, below the success height (tipped,
+    /// pivoting or slipping in the grasp), and with it out of the hand (dropped, or never
+    /// picked up); see [`LiftStats`] (0 in evaluations saved before they were recorded).
+    #[serde(default)]
+    pub failed_in_hand: usize,
+    /// See `failed_in_hand`.
+    #[serde(default)]
+    pub failed_out_of_hand: usize,
+    /// Each trial's object height when the lift was judged: its lowest point above the
+    /// table top (m; 0 where the trial did not lift), in trial order (empty in evaluations
+    /// saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lift_heights: Vec<f64>,
+    /// How far the object turned during each trial's lift (rad; 0 where the trial did not
+    /// lift), in trial order (empty in evaluations saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lift_turns: Vec<f64>,
 }
 
 /// One trial's physics failure.
@@ -406,6 +423,24 @@ pub struct LiftStats {
     pub mean_grip_held: f64,
     /// See `mean_grip_held`.
     pub mean_grip_dropped: f64,
+    /// Failed lifts that ended with the object still in the hand, below the success
+    /// height: tipped, pivoting or slipping in the grasp
+    /// ([`EpisodeSummary::failed_in_hand`]; 0 in evaluations saved before it was recorded).
+    #[serde(default)]
+    pub failed_in_hand: usize,
+    /// Failed lifts that ended with the object out of the hand: dropped, or never picked
+    /// up ([`EpisodeSummary::failed_out_of_hand`]).
+    #[serde(default)]
+    pub failed_out_of_hand: usize,
+    /// Median turn of the object during the lifts that held it, and during those that
+    /// failed (degrees; 0 when there were none): a grasp that pins the object keeps it
+    /// small, one the object tips or pivots in does not
+    /// ([`EpisodeSummary::object_turn`]).
+    #[serde(default)]
+    pub median_turn_held_deg: f64,
+    /// See `median_turn_held_deg`.
+    #[serde(default)]
+    pub median_turn_failed_deg: f64,
 }
 
 impl LiftStats {
@@ -425,6 +460,18 @@ impl LiftStats {
                 xs.iter().sum::<f64>() / xs.len() as f64
             }
         };
+        let median_turn = |f: &dyn Fn(&EpisodeSummary) -> bool| {
+            let turns: Vec<f64> = lifted
+                .iter()
+                .filter(|e| f(e))
+                .map(|e| e.object_turn.to_degrees())
+                .collect();
+            if turns.is_empty() {
+                0.0
+            } else {
+                crate::util::stats::median(&turns)
+            }
+        };
         LiftStats {
             lifted: lifted.len(),
             thumb_contact_rate: lifted.iter().filter(|e| e.thumb_contact_at_lift).count() as f64
@@ -432,6 +479,10 @@ impl LiftStats {
             mean_grip_effort: mean(&|_| true),
             mean_grip_held: mean(&|e| e.success),
             mean_grip_dropped: mean(&|e| !e.success),
+            failed_in_hand: lifted.iter().filter(|e| e.failed_in_hand()).count(),
+            failed_out_of_hand: lifted.iter().filter(|e| e.failed_out_of_hand()).count(),
+            median_turn_held_deg: median_turn(&|e| e.success),
+            median_turn_failed_deg: median_turn(&|e| e.failed_in_hand() || e.failed_out_of_hand()),
         }
     }
 }
@@ -617,6 +668,10 @@ pub fn evaluate(
             } else {
                 Vec::new()
             },
+            failed_in_hand: eps.iter().filter(|e| e.failed_in_hand()).count(),
+            failed_out_of_hand: eps.iter().filter(|e| e.failed_out_of_hand()).count(),
+            lift_heights: eps.iter().map(|e| e.object_height).collect(),
+            lift_turns: eps.iter().map(|e| e.object_turn).collect(),
         });
         recordings.extend(trials.into_iter().flat_map(|t| t.recordings));
     }
@@ -886,7 +941,7 @@ mod tests {
 
     #[test]
     fn lift_stats_hand_computed() {
-        let ep = |lifted, success, thumb, grip| EpisodeSummary {
+        let ep = |lifted, success, thumb, grip, in_hand| EpisodeSummary {
             object: "box".into(),
             success,
             steps: 3,
@@ -899,22 +954,37 @@ mod tests {
             touched_in_stage1: true,
             thumb_contact_at_lift: thumb,
             grip_effort: grip,
+            object_height: 0.0,
+            in_hand,
+            object_turn: grip / 10.0,
         };
-        // Three lifts (2 held with grips 4 and 2, 1 dropped with 1), thumb on 2 of them;
-        // the episode that never lifted is left out.
+        // Four lifts (2 held with grips 4 and 2; 2 failed with 1 and 3, one of them with
+        // the object still in the hand), thumb on 3 of them; the episode that never lifted
+        // is left out.
         let eps = [
-            ep(true, true, true, 4.0),
-            ep(true, true, false, 2.0),
-            ep(true, false, true, 1.0),
-            ep(false, false, true, 9.0),
+            ep(true, true, true, 4.0, true),
+            ep(true, true, false, 2.0, true),
+            ep(true, false, true, 1.0, true),
+            ep(true, false, true, 3.0, false),
+            ep(false, false, true, 9.0, false),
         ];
         let s = LiftStats::of(&eps);
-        assert_eq!(s.lifted, 3);
-        assert!((s.thumb_contact_rate - 2.0 / 3.0).abs() < 1e-12);
-        assert!((s.mean_grip_effort - 7.0 / 3.0).abs() < 1e-12);
+        assert_eq!(s.lifted, 4);
+        assert!((s.thumb_contact_rate - 3.0 / 4.0).abs() < 1e-12);
+        assert!((s.mean_grip_effort - 10.0 / 4.0).abs() < 1e-12);
         assert!((s.mean_grip_held - 3.0).abs() < 1e-12);
-        assert!((s.mean_grip_dropped - 1.0).abs() < 1e-12);
+        assert!((s.mean_grip_dropped - 2.0).abs() < 1e-12);
+        assert_eq!((s.failed_in_hand, s.failed_out_of_hand), (1, 1));
+        // Turns of grip / 10 rad: held 0.4 and 0.2 (median 0.3), failed 0.1 and 0.3 (0.2).
+        assert!((s.median_turn_held_deg - 0.3f64.to_degrees()).abs() < 1e-9);
+        assert!((s.median_turn_failed_deg - 0.2f64.to_degrees()).abs() < 1e-9);
         assert_eq!(LiftStats::of(&[]), LiftStats::default());
+        // A physics failure is neither kind of failed lift.
+        let broken = EpisodeSummary {
+            physics_failure: true,
+            ..ep(true, false, true, 1.0, true)
+        };
+        assert!(!broken.failed_in_hand() && !broken.failed_out_of_hand());
     }
 
     #[test]
@@ -942,6 +1012,10 @@ mod tests {
                 deepest_contacts_with: Vec::new(),
                 failures: Vec::new(),
                 attempts: Vec::new(),
+                failed_in_hand: 0,
+                failed_out_of_hand: 0,
+                lift_heights: Vec::new(),
+                lift_turns: Vec::new(),
             }],
             mean_rate: 0.8,
             ci95: wilson(8, 10),
@@ -1006,6 +1080,10 @@ mod tests {
                     }),
                 }],
                 attempts: Vec::new(),
+                failed_in_hand: 0,
+                failed_out_of_hand: 0,
+                lift_heights: Vec::new(),
+                lift_turns: Vec::new(),
             }],
             mean_rate: 0.75,
             ci95: wilson(3, 4),

@@ -321,6 +321,10 @@ mod tests {
                 deepest_contacts_with: Vec::new(),
                 failures: Vec::new(),
                 attempts: Vec::new(),
+                failed_in_hand: 0,
+                failed_out_of_hand: 0,
+                lift_heights: Vec::new(),
+                lift_turns: Vec::new(),
             })
             .collect();
         let k: usize = objects.iter().map(|o| o.successes).sum();

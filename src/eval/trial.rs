@@ -200,6 +200,9 @@ mod tests {
             touched_in_stage1: true,
             thumb_contact_at_lift: success,
             grip_effort: 1.0,
+            object_height: if success { 0.12 } else { 0.0 },
+            in_hand: success,
+            object_turn: 0.1,
         }
     }
 

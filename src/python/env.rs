@@ -50,7 +50,8 @@ pub struct CoreEnv {
 }
 
 /// An episode summary as a dict (object, success, steps, episode_return, lifted,
-/// physics_failure, touched_in_stage1, thumb_contact_at_lift, grip_effort).
+/// physics_failure, touched_in_stage1, thumb_contact_at_lift, grip_effort, object_height,
+/// in_hand, object_turn).
 pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("object", &s.object)?;
@@ -62,6 +63,9 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("touched_in_stage1", s.touched_in_stage1)?;
     d.set_item("thumb_contact_at_lift", s.thumb_contact_at_lift)?;
     d.set_item("grip_effort", s.grip_effort)?;
+    d.set_item("object_height", s.object_height)?;
+    d.set_item("in_hand", s.in_hand)?;
+    d.set_item("object_turn", s.object_turn)?;
     Ok(d)
 }
 

@@ -285,6 +285,11 @@ pub struct LiftOutcome {
     pub object_lowest_z: f64,
     /// Whether the object touches the hand at the end.
     pub in_contact: bool,
+    /// How far the object turned during the lift (rad, 0 to pi): the angle of the
+    /// rotation from its orientation when the lift began to its orientation at the end.
+    /// A grasp that holds the object keeps it small; a large turn is the object tipping,
+    /// pivoting about the fingers or swinging in the grasp.
+    pub object_turn: f64,
     /// The grip the fingers held through the lift: the sum over the 22 finger joints of
     /// the absolute PD effort (N m), averaged over the lift's physics steps.
     pub grip_effort: f64,
@@ -1059,6 +1064,7 @@ impl HandSim {
         let ramp = (l.ramp_time / self.cfg.dt).round().max(1.0) as usize;
         let hold = (l.hold_time / self.cfg.dt).round() as usize;
         let (mut grip_sum, mut grip_steps) = (0.0, 0usize);
+        let start = self.object_pose().map(|p| p.rotation);
         for k in 0..ramp + hold {
             if self.failure.is_some() {
                 break;
@@ -1076,10 +1082,15 @@ impl HandSim {
         let lowest = self.object_lowest_z();
         let in_contact = self.hand_object_force() > 0.0;
         let failure = self.failure().cloned();
+        let object_turn = match (start, self.object_pose()) {
+            (Some(a), Some(b)) => a.angle_to(&b.rotation),
+            _ => 0.0,
+        };
         LiftOutcome {
             success: failure.is_none() && lowest >= l.success_height && in_contact,
             object_lowest_z: lowest,
             in_contact,
+            object_turn,
             grip_effort: grip_sum / grip_steps.max(1) as f64,
             failure,
         }

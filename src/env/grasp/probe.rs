@@ -44,7 +44,7 @@ impl GraspEnv {
         self.stack.clear();
         self.steps = 0;
         self.episode_return = 0.0;
-        self.lift_grip = None;
+        self.lift_record = None;
         self.done = false;
         self.touched_in_stage1 = self.stage1();
         let zero = vec![0.0; self.action_spec().continuous];
