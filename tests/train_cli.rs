@@ -367,23 +367,43 @@ fn shipped_configs_load() {
         }
         n += 1;
     }
-    assert_eq!(n, 20);
-    // The main job until 2026-12-06 morning: the main job with the grip's ramp at 0.15
-    // instead of its delay, nothing else.
+    assert_eq!(n, 21);
+    // The main job until 2026-12-06 late morning: the main job without the squeeze at the
+    // lift, nothing else.
     let main = TrainConfig::load(&dir.join("quick.toml")).unwrap();
-    let ramp = TrainConfig::load(&dir.join("quick_grip_ramp.toml")).unwrap();
+    let delay = TrainConfig::load(&dir.join("quick_grip_delay.toml")).unwrap();
     let act = &main.env.grasp.action;
+    assert_eq!(
+        (act.lift_squeeze, act.lift_squeeze_in_training),
+        (0.25, false)
+    );
+    assert_eq!(delay.env.grasp.action.lift_squeeze, 0.0);
+    let mut as_main = delay.clone();
+    as_main.env.grasp.action.lift_squeeze = act.lift_squeeze;
+    as_main.name = main.name.clone();
+    assert_eq!(as_main, main);
+    // Until 2026-12-06 morning: that with the grip's ramp at 0.15 instead of its delay,
+    // nothing else.
+    let ramp = TrainConfig::load(&dir.join("quick_grip_ramp.toml")).unwrap();
+    let act = &delay.env.grasp.action;
     assert_eq!(
         (act.grip_delay, act.grip_ramp, act.grip_ramp_in_training),
         (1, 0.0, false)
     );
     let ramp_act = &ramp.env.grasp.action;
-    assert_eq!((ramp_act.grip_delay, ramp_act.grip_ramp), (0, 0.15));
-    let mut as_main = ramp.clone();
-    as_main.env.grasp.action.grip_delay = act.grip_delay;
-    as_main.env.grasp.action.grip_ramp = act.grip_ramp;
-    as_main.name = main.name.clone();
-    assert_eq!(as_main, main);
+    assert_eq!(
+        (
+            ramp_act.grip_delay,
+            ramp_act.grip_ramp,
+            ramp_act.lift_squeeze
+        ),
+        (0, 0.15, 0.0)
+    );
+    let mut as_delay = ramp.clone();
+    as_delay.env.grasp.action.grip_delay = act.grip_delay;
+    as_delay.env.grasp.action.grip_ramp = act.grip_ramp;
+    as_delay.name = delay.name.clone();
+    assert_eq!(as_delay, delay);
     // Until 2026-12-06 early morning: that without the ramp, nothing else.
     let quarter = TrainConfig::load(&dir.join("quick_grip_quarter.toml")).unwrap();
     let mut as_ramp = quarter.clone();
@@ -391,16 +411,23 @@ fn shipped_configs_load() {
     as_ramp.env.grasp.action.grip_ramp_in_training = ramp_act.grip_ramp_in_training;
     as_ramp.name = ramp.name.clone();
     assert_eq!(as_ramp, ramp);
-    // Training's own episodes are the same in all three (no delay, no ramp): they act
-    // differently only afterwards.
-    for c in [&main, &ramp] {
+    // Training's own episodes are the same in all four (no delay, no ramp, no squeeze):
+    // they act differently only afterwards.
+    let mut quarter_trains = quarter.env.grasp.for_training();
+    quarter_trains.action.lift_squeeze_in_training = true;
+    for c in [&main, &delay, &ramp] {
         let mut trains = c.env.grasp.for_training();
         assert_eq!(
-            (trains.action.grip_delay, trains.action.grip_ramp),
-            (0, 0.0)
+            (
+                trains.action.grip_delay,
+                trains.action.grip_ramp,
+                trains.action.lift_squeeze
+            ),
+            (0, 0.0, 0.0)
         );
         trains.action.grip_ramp_in_training = true;
-        assert_eq!(trains, quarter.env.grasp.for_training());
+        trains.action.lift_squeeze_in_training = true;
+        assert_eq!(trains, quarter_trains);
     }
     // The main job until 2026-12-05 night: that with the grip at 0.5, nothing else.
     let half = TrainConfig::load(&dir.join("quick_grip_half.toml")).unwrap();
@@ -507,8 +534,8 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
     }
     assert_eq!(n, 7);
     // The main job (quick.toml) is the grip_half lever's recipe with 8 synergies and the
-    // grip at a quarter, delayed by a step where it acts; only that, its name, its time cap
-    // and how often it redraws the curve differ.
+    // grip at a quarter, delayed by a step and squeezed at the lift where it acts; only
+    // that, its name, its time cap and how often it redraws the curve differ.
     let mut quick = TrainConfig::load(&dir.join("quick.toml")).unwrap();
     let half = TrainConfig::load(&dir.join("levers/grip_half.toml")).unwrap();
     assert_eq!(quick.time_budget_minutes, Some(15.0));
@@ -518,6 +545,9 @@ fn each_lever_config_is_the_shipped_recipe_with_one_change() {
     quick.env.grasp.action.grip_ramp = half.env.grasp.action.grip_ramp;
     quick.env.grasp.action.grip_delay = half.env.grasp.action.grip_delay;
     quick.env.grasp.action.grip_ramp_in_training = half.env.grasp.action.grip_ramp_in_training;
+    quick.env.grasp.action.lift_squeeze = half.env.grasp.action.lift_squeeze;
+    quick.env.grasp.action.lift_squeeze_in_training =
+        half.env.grasp.action.lift_squeeze_in_training;
     quick.n_components = half.n_components;
     quick.name = half.name.clone();
     quick.time_budget_minutes = half.time_budget_minutes;

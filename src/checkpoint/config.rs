@@ -723,6 +723,14 @@ mod tests {
                 "line 3, column 14: invalid value: integer `-1`",
             ),
             (
+                "[env.action]\nlift_squeeze = 1.5\n",
+                "action.lift_squeeze: 1.5 is outside [0, 1]",
+            ),
+            (
+                "[env.action]\nlift_squeeze = nan\n",
+                "action.lift_squeeze: NaN is outside [0, 1]",
+            ),
+            (
                 "[env.reward]\ndisplacement_weight = -1.0\n",
                 "reward.displacement_weight",
             ),

@@ -603,27 +603,39 @@ fn ranker(
     }))
 }
 
-/// How a checkpoint's grip acts, for the progress line: "" without a grip, else its
-/// scale, delay and ramp, e.g. " (grip 0.25, ramped by 0.15 per step)" or " (grip 0.25,
-/// off for the first 1 step)".
+/// How a checkpoint's grip and lift act, for the progress line: "" with neither a grip
+/// nor a squeeze at the lift, else the grip's scale, delay and ramp and the squeeze, e.g.
+/// " (grip 0.25, ramped by 0.15 per step)" or " (grip 0.25, off for the first 1 step;
+/// squeezed by 0.25 at the lift)".
 fn grip_note(action: &grasp::env::action::ActionConfig) -> String {
     use grasp::util::num::short;
-    if action.grip_scale <= 0.0 {
-        return String::new();
+    let mut parts = Vec::new();
+    if action.grip_scale > 0.0 {
+        let mut grip = format!("grip {}", short(action.grip_scale));
+        if action.grip_delay > 0 {
+            let steps = if action.grip_delay == 1 {
+                "step"
+            } else {
+                "steps"
+            };
+            grip += &format!(", off for the first {} {steps}", action.grip_delay);
+        }
+        if action.grip_ramp > 0.0 {
+            grip += &format!(", ramped by {} per step", short(action.grip_ramp));
+        }
+        parts.push(grip);
     }
-    let mut note = format!(" (grip {}", short(action.grip_scale));
-    if action.grip_delay > 0 {
-        let steps = if action.grip_delay == 1 {
-            "step"
-        } else {
-            "steps"
-        };
-        note += &format!(", off for the first {} {steps}", action.grip_delay);
+    if action.lift_squeeze > 0.0 {
+        parts.push(format!(
+            "squeezed by {} at the lift",
+            short(action.lift_squeeze)
+        ));
     }
-    if action.grip_ramp > 0.0 {
-        note += &format!(", ramped by {} per step", short(action.grip_ramp));
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", parts.join("; "))
     }
-    note + ")"
 }
 
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
@@ -871,7 +883,7 @@ mod tests {
     use grasp::env::action::ActionConfig;
 
     #[test]
-    fn the_grip_note_names_the_scale_the_delay_and_the_ramp() {
+    fn the_grip_note_names_the_scale_the_delay_the_ramp_and_the_squeeze() {
         let mut a = ActionConfig::default();
         assert_eq!(grip_note(&a), "");
         a.grip_scale = 0.25;
@@ -884,5 +896,16 @@ mod tests {
             grip_note(&a),
             " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step)"
         );
+        a.lift_squeeze = 0.25;
+        assert_eq!(
+            grip_note(&a),
+            " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step; squeezed by \
+             0.25 at the lift)"
+        );
+        let squeeze_only = ActionConfig {
+            lift_squeeze: 0.5,
+            ..ActionConfig::default()
+        };
+        assert_eq!(grip_note(&squeeze_only), " (squeezed by 0.5 at the lift)");
     }
 }

@@ -80,6 +80,15 @@ pub struct ActionConfig {
     /// the checkpoint acts afterwards: `grasp eval`, `grasp run`, `grasp rollout` (see
     /// [`crate::env::grasp::EnvConfig::for_training`]).
     pub grip_ramp_in_training: bool,
+    /// Beyond the paper (0: off): when the policy lifts, its finger targets move this
+    /// share of the way towards the power grasp (baseline 1's closed posture) and stay
+    /// there through the lift, so fingers resting on the object press harder while it
+    /// is raised ([`lift_targets`]). Works with or without the grip. In [0, 1].
+    pub lift_squeeze: f64,
+    /// Whether training's own episodes squeeze at the lift too (default true). With
+    /// false the policy trains without it and the squeeze applies where the checkpoint
+    /// acts afterwards, as `grip_ramp_in_training` does for the grip's ramp and delay.
+    pub lift_squeeze_in_training: bool,
 }
 
 impl ActionConfig {
@@ -112,6 +121,8 @@ impl Default for ActionConfig {
             grip_ramp: 0.0,
             grip_delay: 0,
             grip_ramp_in_training: true,
+            lift_squeeze: 0.0,
+            lift_squeeze_in_training: true,
         }
     }
 }
@@ -127,6 +138,26 @@ pub struct Decoded {
     pub lift: bool,
     /// Blend weight `w` towards the power grasp (0 without the grip component).
     pub grip: f64,
+}
+
+/// The hand targets the lift holds: `targets` with every finger joint moved the share
+/// `lift_squeeze` of the way towards `closed`, within `finger_limits`; the wrist as it
+/// is. `targets` themselves with the squeeze off. The environment and the robot pipeline
+/// both use this function.
+pub fn lift_targets(
+    cfg: &ActionConfig,
+    targets: &[f64; 24],
+    closed: &[f64; 24],
+    finger_limits: &[(f64, f64); 22],
+) -> [f64; 24] {
+    let mut out = *targets;
+    if cfg.lift_squeeze > 0.0 {
+        for (k, (lo, hi)) in finger_limits.iter().enumerate() {
+            let t = targets[k + 2];
+            out[k + 2] = (t + cfg.lift_squeeze * (closed[k + 2] - t)).clamp(*lo, *hi);
+        }
+    }
+    out
 }
 
 /// Clips a raw policy output to [-1, 1] (NaN becomes 0).
@@ -378,5 +409,35 @@ mod tests {
         assert!((d.d_eps[1] + 0.05).abs() < 1e-12);
         assert_eq!(d.d_wrist, [0.05, 0.0]);
         assert!(!d.lift);
+    }
+
+    #[test]
+    fn lift_targets_move_the_fingers_a_share_towards_the_power_grasp() {
+        let h = Hand::new();
+        let mut t = crate::robot::Posture::Open.angles();
+        t[0] = 0.1;
+        t[1] = -0.2;
+        let mut cfg = ActionConfig::default();
+        assert_eq!(lift_targets(&cfg, &t, &h.closed, &h.fl), t);
+        cfg.lift_squeeze = 0.25;
+        let s = lift_targets(&cfg, &t, &h.closed, &h.fl);
+        assert_eq!((s[0], s[1]), (0.1, -0.2), "the wrist is left as it is");
+        for j in 0..22 {
+            let want = (t[j + 2] + 0.25 * (h.closed[j + 2] - t[j + 2])).clamp(h.fl[j].0, h.fl[j].1);
+            assert_eq!(s[j + 2], want, "joint {j}");
+        }
+        // Hand-computed: 0.3 rad open, 1.5 rad closed, a quarter of the way: 0.6 rad.
+        let mut open = [0.0; 24];
+        let mut closed = [0.0; 24];
+        open[5] = 0.3;
+        closed[5] = 1.5;
+        let limits = [(-2.0, 2.0); 22];
+        assert!((lift_targets(&cfg, &open, &closed, &limits)[5] - 0.6).abs() < 1e-15);
+        // Within the joint's limits: an upper limit of 0.5 rad holds it there.
+        let mut tight = limits;
+        tight[3] = (-2.0, 0.5);
+        assert_eq!(lift_targets(&cfg, &open, &closed, &tight)[5], 0.5);
+        cfg.lift_squeeze = 1.0;
+        assert_eq!(lift_targets(&cfg, &open, &closed, &limits), closed);
     }
 }

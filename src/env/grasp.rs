@@ -22,7 +22,7 @@
 // ObjectSpec is Copy today but is meant to carry convex hulls; keep the explicit clones.
 #![allow(clippy::clone_on_copy)]
 
-use super::action::{clip_unit, component_std, hand_targets};
+use super::action::{clip_unit, component_std, hand_targets, lift_targets};
 use super::api::{Action, ActionSpec, Env, Step, StepInfo};
 pub use super::closing::closing_target;
 use super::closing::ClosingPath;
@@ -564,8 +564,20 @@ impl GraspEnv {
         out
     }
 
-    /// Lifts, judges and ends the episode (the final step of eq. 4).
+    /// Lifts, judges and ends the episode (the final step of eq. 4), the fingers first
+    /// squeezed where `action.lift_squeeze` asks ([`lift_targets`]).
     fn lift(&mut self) -> Step {
+        if self.cfg.action.lift_squeeze > 0.0 {
+            let held = lift_targets(
+                &self.cfg.action,
+                &self.sim.targets(),
+                &self.closed,
+                &self.finger_limits,
+            );
+            if self.sim.set_targets(&held).is_err() {
+                return self.failed_step();
+            }
+        }
         let out = self.lift_and_judge();
         let failure = out.failure.is_some();
         let r = if out.success { 1.0 } else { 0.0 };
@@ -910,6 +922,55 @@ mod tests {
     }
 
     #[test]
+    fn the_lift_holds_the_squeezed_targets() {
+        // Two environments on the same scene and the same action before the lift: the
+        // squeezing one lifts with `lift_targets` of the other's last targets (the plain
+        // one lifts with its targets unchanged), and the squeeze holds the box harder.
+        let with = |squeeze: f64| {
+            let mut c = EnvConfig::default();
+            c.action.lift_squeeze = squeeze;
+            let mut env = env_with(ObjectSpec::default_box(), c);
+            env.reset(3);
+            let n = crate::synergy::default_model().n_components();
+            env.step(&Action {
+                cont: vec![0.5; n + 2],
+                lift: false,
+            });
+            env
+        };
+        let (mut plain, mut squeezed) = (with(0.0), with(0.5));
+        let before = plain.sim.targets();
+        assert_eq!(squeezed.sim.targets(), before);
+        let lift = Action {
+            cont: Vec::new(),
+            lift: true,
+        };
+        plain.step(&lift);
+        squeezed.step(&lift);
+        assert_eq!(plain.sim.targets(), before);
+        let want = lift_targets(
+            &squeezed.cfg.action,
+            &before,
+            &squeezed.closed,
+            &squeezed.finger_limits,
+        );
+        // The simulator couples J1/J2 and clamps; the squeezed targets are already
+        // feasible up to the coupling's averaging.
+        for (k, (got, want)) in squeezed.sim.targets().iter().zip(want).enumerate() {
+            assert!((got - want).abs() < 1e-12, "joint {k}: {got} vs {want}");
+        }
+        assert_ne!(squeezed.sim.targets(), before);
+        let (p, s) = (plain.last.clone().unwrap(), squeezed.last.clone().unwrap());
+        assert!(p.lifted && s.lifted);
+        assert!(
+            s.grip_effort > p.grip_effort,
+            "{} vs {}",
+            s.grip_effort,
+            p.grip_effort
+        );
+    }
+
+    #[test]
     fn training_drops_the_grip_ramp_only_where_asked() {
         let mut c = EnvConfig::default();
         c.action.grip_scale = 0.25;
@@ -925,6 +986,13 @@ mod tests {
         back.action.grip_delay = 1;
         assert_eq!(back, c);
         assert!(c.validate().is_ok() && t.validate().is_ok());
+        // The squeeze at the lift has its own switch.
+        c.action.lift_squeeze = 0.25;
+        assert_eq!(c.for_training().action.lift_squeeze, 0.25);
+        c.action.lift_squeeze_in_training = false;
+        let t = c.for_training();
+        assert_eq!(t.action.lift_squeeze, 0.0);
+        assert_eq!((t.action.grip_ramp, t.action.grip_delay), (0.0, 0));
     }
 
     #[test]

@@ -31,7 +31,7 @@
 //! attempt ends with an outcome line, also when it fails with an error.
 
 use super::RunError;
-use crate::env::action::{clip_unit, component_std, hand_targets};
+use crate::env::action::{clip_unit, component_std, hand_targets, lift_targets, ActionConfig};
 use crate::env::closing::ClosingPath;
 use crate::env::grasp::{Agent, AtMaxSteps, EnvConfig};
 use crate::env::obs::{FrameStack, Modality, ObsLayout, N_SURFACE};
@@ -700,6 +700,27 @@ impl<B: HandArm> Attempt<'_, B> {
         Ok(m)
     }
 
+    /// The step that decides the lift: logged with the targets the lift holds, which are
+    /// the last ones sent, or those squeezed towards the power grasp where
+    /// `action.lift_squeeze` asks ([`lift_targets`]; sent at once, as the environment
+    /// does before its lift).
+    fn lift_command(
+        &mut self,
+        m: &Mapped,
+        action: Vec<f64>,
+        cfg: &ActionConfig,
+        finger_limits: &[(f64, f64); 22],
+    ) -> Result<(), RunError> {
+        if cfg.lift_squeeze > 0.0 {
+            let held = lift_targets(cfg, &self.last_sent, &script::power_grasp(), finger_limits);
+            self.command(&held, action, 0.0)?;
+        } else {
+            let hold = self.last_sent;
+            self.log_step(m, action, hold, Vec::new())?;
+        }
+        Ok(())
+    }
+
     fn log_step(
         &mut self,
         m: &Mapped,
@@ -834,8 +855,7 @@ fn attempt_body<B: HandArm>(
     if !lifted && env.at_max_steps == AtMaxSteps::Lift {
         // The policy was trained to lift at the step cap.
         lifted = true;
-        let hold = at.last_sent;
-        at.log_step(&m, Vec::new(), hold, Vec::new())?;
+        at.lift_command(&m, Vec::new(), &env.action, &finger_limits)?;
     }
     if !lifted {
         return Ok(AttemptOutcome {
@@ -968,8 +988,7 @@ fn stage2<B: HandArm>(
         logged.push(if a.lift { 1.0 } else { 0.0 });
         if a.lift {
             lifted = true;
-            let hold = at.last_sent;
-            at.log_step(&m, logged, hold, Vec::new())?;
+            at.lift_command(&m, logged, &env.action, &finger_limits)?;
             break;
         }
         let targets = hand_targets(

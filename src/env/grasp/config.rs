@@ -132,13 +132,17 @@ impl EnvConfig {
     }
 
     /// The configuration of training's own episodes: this one, without the grip's ramp
-    /// and delay where `action.grip_ramp_in_training` is false (the checkpoints keep
+    /// and delay where `action.grip_ramp_in_training` is false and without the squeeze at
+    /// the lift where `action.lift_squeeze_in_training` is false (the checkpoints keep
     /// this configuration, so the policy acts with them everywhere else).
     pub fn for_training(&self) -> EnvConfig {
         let mut c = self.clone();
         if !c.action.grip_ramp_in_training {
             c.action.grip_ramp = 0.0;
             c.action.grip_delay = 0;
+        }
+        if !c.action.lift_squeeze_in_training {
+            c.action.lift_squeeze = 0.0;
         }
         c
     }
@@ -196,6 +200,12 @@ impl EnvConfig {
             "action.grip_ramp",
             self.action.grip_ramp,
             (0.0..=1.0).contains(&self.action.grip_ramp),
+            "[0, 1]",
+        )?;
+        within(
+            "action.lift_squeeze",
+            self.action.lift_squeeze,
+            (0.0..=1.0).contains(&self.action.lift_squeeze),
             "[0, 1]",
         )?;
         if self.action.grip_ramp > 0.0 && self.action.grip_scale == 0.0 {
