@@ -14,6 +14,7 @@
 
 pub mod calibrate;
 pub mod pipeline;
+pub mod plan;
 pub mod sim_backend;
 
 use crate::hardware::calibration::CalibrationError;
