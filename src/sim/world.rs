@@ -45,7 +45,11 @@ use rand::{Rng, SeedableRng};
 use rapier3d::prelude::*;
 use serde::{Deserialize, Serialize};
 
+mod health;
+mod scene;
 mod state;
+
+pub use scene::Scene;
 
 #[path = "build.rs"]
 mod build;
@@ -181,99 +185,6 @@ pub struct ObjectContact {
     pub part: Option<usize>,
     /// Physics step since the reset at which it was seen.
     pub step: u64,
-}
-
-/// Where hand and object start an episode.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Scene {
-    /// The 24 start joint angles (paper order).
-    pub start: [f64; 24],
-    /// Object centre x, y on the table (m); it rests on the table top.
-    pub object_xy: [f64; 2],
-    /// Object yaw about z (rad).
-    pub object_yaw: f64,
-    /// Grasp point (TH/LF tip midpoint) in the world (m).
-    pub grasp_point: [f64; 3],
-    /// Hand yaw: direction of the thumb-to-little-finger line (rad).
-    pub hand_yaw: f64,
-}
-
-impl Scene {
-    /// The hand above the object's centre: grasp point at the centre plus `z_offset`, the
-    /// object at the origin with yaw 0, the hand at `hand_yaw`.
-    pub fn above(object: &ObjectSpec, start: [f64; 24], z_offset: f64, hand_yaw: f64) -> Scene {
-        Scene {
-            start,
-            object_xy: [0.0, 0.0],
-            object_yaw: 0.0,
-            grasp_point: [0.0, 0.0, object.rest_height() + z_offset],
-            hand_yaw,
-        }
-    }
-
-    /// A top-down grasp of any object: the object at the origin with yaw 0, the grasp point
-    /// on its vertical axis `depth` m below its top, but never below its centre (so a flat
-    /// object is gripped around its middle and a tall one near its top), the hand at
-    /// `hand_yaw`. For the default 8 cm box, `depth = 0.01` is [`Scene::above`] with
-    /// `z_offset = 0.03`.
-    pub fn top_down(object: &ObjectSpec, start: [f64; 24], depth: f64, hand_yaw: f64) -> Scene {
-        let h = object.rest_height();
-        let z = (2.0 * h - depth).max(h);
-        Scene {
-            start,
-            object_xy: [0.0, 0.0],
-            object_yaw: 0.0,
-            grasp_point: [0.0, 0.0, z],
-            hand_yaw,
-        }
-    }
-
-    /// This scene with uniform noise: x/y of the grasp point within `+-xy_noise` m and the
-    /// hand yaw within `+-yaw_noise` rad, drawn from `ChaCha8Rng::seed_from_u64(seed)`.
-    pub fn with_noise(mut self, xy_noise: f64, yaw_noise: f64, seed: u64) -> Scene {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let mut u = |a: f64| {
-            if a > 0.0 {
-                rng.random_range(-a..=a)
-            } else {
-                0.0
-            }
-        };
-        self.grasp_point[0] += u(xy_noise);
-        self.grasp_point[1] += u(xy_noise);
-        self.hand_yaw += u(yaw_noise);
-        self
-    }
-
-    /// [`Scene::above`] with uniform noise: x/y of the grasp point within `+-xy_noise` m and
-    /// the hand yaw within `+-yaw_noise` rad, drawn from `ChaCha8Rng::seed_from_u64(seed)`.
-    pub fn randomized(
-        object: &ObjectSpec,
-        start: [f64; 24],
-        z_offset: f64,
-        xy_noise: f64,
-        yaw_noise: f64,
-        seed: u64,
-    ) -> Scene {
-        Scene::above(object, start, z_offset, 0.0).with_noise(xy_noise, yaw_noise, seed)
-    }
-
-    fn check(&self) -> Result<(), SimError> {
-        let bad = |what| Err(SimError::NonFiniteScene { what });
-        if self.start.iter().any(|v| !v.is_finite()) {
-            return bad("start posture");
-        }
-        if self.object_xy.iter().any(|v| !v.is_finite()) || !self.object_yaw.is_finite() {
-            return bad("object pose");
-        }
-        if self.grasp_point.iter().any(|v| !v.is_finite()) {
-            return bad("grasp point");
-        }
-        if !self.hand_yaw.is_finite() {
-            return bad("hand yaw");
-        }
-        Ok(())
-    }
 }
 
 /// Result of the lift that ends an episode.
@@ -911,136 +822,6 @@ impl HandSim {
                 l.joint.data.limit_axes.set(axis, active);
             }
         }
-    }
-
-    fn check_physics(&mut self) -> Option<PhysicsFailure> {
-        if !self.pipeline.quarantine().is_empty() {
-            return Some(PhysicsFailure::NonFinite);
-        }
-        let f = &self.cfg.failure;
-        for h in self
-            .hand_bodies
-            .iter()
-            .chain(std::iter::once(&self.object_body))
-        {
-            let Some(rb) = self.sets.bodies.get(*h) else {
-                continue;
-            };
-            let t = rb.translation();
-            let v = rb.linvel();
-            if !(t.is_finite() && v.is_finite() && rb.angvel().is_finite()) {
-                return Some(PhysicsFailure::NonFinite);
-            }
-            let speed = v.length() as f64;
-            if speed > f.max_speed {
-                return Some(PhysicsFailure::TooFast { speed });
-            }
-        }
-        let p = self.object_position();
-        let distance = (p - self.object_start).norm();
-        if distance > f.max_object_travel {
-            return Some(PhysicsFailure::ObjectLost { distance });
-        }
-        let max_penetration = f.max_penetration;
-        // Named (an allocation) only when it is the deepest so far or a failure.
-        let (depth, other, sub) = self.deepest_object_pair()?;
-        let deeper = self.deepest.as_ref().is_none_or(|d| depth > d.depth);
-        if !deeper && depth <= max_penetration {
-            return None;
-        }
-        let c = self.object_contact(depth, other, sub);
-        if deeper {
-            self.deepest = Some(c.clone());
-        }
-        (c.depth > max_penetration).then_some(PhysicsFailure::DeepPenetration {
-            depth: c.depth,
-            with: c.with,
-            part: c.part,
-        })
-    }
-
-    /// The object's deepest penetrating contact in the current step, with what it touched.
-    #[cfg(test)]
-    fn deepest_object_contact(&self) -> Option<ObjectContact> {
-        let (depth, other, sub) = self.deepest_object_pair()?;
-        Some(self.object_contact(depth, other, sub))
-    }
-
-    /// The object's deepest penetrating contact in the current step, unnamed: its depth,
-    /// the collider the object touched and the object's part (see
-    /// [`HandSim::object_contact`]).
-    fn deepest_object_pair(&self) -> Option<(f64, ColliderHandle, Option<u32>)> {
-        let mut best: Option<(f64, ColliderHandle, Option<u32>)> = None;
-        let pairs = self
-            .narrow_phase
-            .contact_pairs_with(self.object_collider)
-            .chain(self.narrow_phase.contact_pairs_with(self.object_hull));
-        for pair in pairs {
-            let Some((m, depth)) = self.pair_depth(pair) else {
-                continue;
-            };
-            if depth <= 0.0 || best.is_some_and(|b| b.0 >= depth) {
-                continue;
-            }
-            // The part of a compound object; none for the hull that meets the table.
-            let part = |c: ColliderHandle, sub: u32| (c == self.object_collider).then_some(sub);
-            best = Some(
-                if pair.collider1 == self.object_collider || pair.collider1 == self.object_hull {
-                    (depth, pair.collider2, part(pair.collider1, m.subshape1))
-                } else {
-                    (depth, pair.collider1, part(pair.collider2, m.subshape2))
-                },
-            );
-        }
-        best
-    }
-
-    /// The object's contact of `depth` with collider `other` on its part `sub`, named.
-    fn object_contact(&self, depth: f64, other: ColliderHandle, sub: Option<u32>) -> ObjectContact {
-        ObjectContact {
-            depth,
-            with: self.collider_name(other),
-            part: sub
-                .filter(|_| self.object.shape.part_count() > 1)
-                .map(|s| s as usize),
-            step: self.physics_steps,
-        }
-    }
-
-    /// The deepest penetration (m) of a contact pair's manifolds at the current poses
-    /// (negative when none touches): each contact point's two body-attached points
-    /// measured along its manifold's normal, as the solver measures them. rapier keeps a
-    /// manifold whose pair barely moved since it was computed (its contact recycling), and
-    /// the separations stored in its points are then those of the step it was computed in.
-    fn pair_depth<'a>(&self, pair: &'a ContactPair) -> Option<(&'a ContactManifold, f64)> {
-        let colliders = &self.sets.colliders;
-        let (co1, co2) = (&colliders[pair.collider1], &colliders[pair.collider2]);
-        let at =
-            |co: &Collider, sub: Option<&Pose>| sub.map_or(*co.position(), |p| *co.position() * *p);
-        let mut best: Option<(&ContactManifold, f64)> = None;
-        for m in pair.manifolds().iter().filter(|m| !m.points.is_empty()) {
-            let pos12 = at(co1, m.subshape_pos1()).inverse() * at(co2, m.subshape_pos2());
-            let depth = m
-                .points
-                .iter()
-                .map(|p| (p.local_p1 - pos12 * p.local_p2).dot(m.local_n1))
-                .fold(Real::NEG_INFINITY, Real::max) as f64;
-            if depth.is_finite() && best.is_none_or(|(_, d)| depth > d) {
-                best = Some((m, depth));
-            }
-        }
-        best
-    }
-
-    /// A collider's name for reports: the hand link it belongs to, or `table`.
-    fn collider_name(&self, h: ColliderHandle) -> String {
-        if h == self.table {
-            return "table".into();
-        }
-        self.collider_links
-            .iter()
-            .find(|(c, _)| *c == h)
-            .map_or_else(|| "unknown".into(), |(_, n)| n.clone())
     }
 
     /// Runs one control period (`control_period / dt` physics steps) with the current
