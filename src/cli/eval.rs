@@ -856,31 +856,62 @@ fn retry_line(r: &AgentResult) -> Option<String> {
 }
 
 /// One line on how an agent's lifts were made: thumb contact and grip, and how the failed
-/// lifts ended.
+/// lifts ended (left out for results saved before it was recorded: `--from-json` of an
+/// older file).
 fn lift_line(r: &grasp::eval::AgentResult) -> String {
     let l = &r.lifts;
-    format!(
+    let mut line = format!(
         "{}: {} lifts, thumb touching at {:.1} % of them; grip through the lift {:.2} N m \
-         (held {:.2}, dropped {:.2}); failed lifts: {} with the object still in the hand, \
-         too low, {} with it out of the hand; the object turned by a median {:.0} deg in \
-         the lifts that held it, {:.0} deg in those that failed\n",
+         (held {:.2}, dropped {:.2})",
         r.agent,
         l.lifted,
         100.0 * l.thumb_contact_rate,
         l.mean_grip_effort,
         l.mean_grip_held,
         l.mean_grip_dropped,
-        l.failed_in_hand,
-        l.failed_out_of_hand,
-        l.median_turn_held_deg,
-        l.median_turn_failed_deg
-    )
+    );
+    if r.objects.iter().any(|o| !o.lift_turns.is_empty()) {
+        line += &format!(
+            "; failed lifts: {} with the object still in the hand, too low, {} with it out \
+             of the hand; the object turned by a median {:.0} deg in the lifts that held it, \
+             {:.0} deg in those that failed",
+            l.failed_in_hand,
+            l.failed_out_of_hand,
+            l.median_turn_held_deg,
+            l.median_turn_failed_deg
+        );
+    }
+    line + "\n"
 }
 
 #[cfg(test)]
 mod tests {
-    use super::grip_note;
+    use super::{grip_note, lift_line};
     use grasp::env::action::ActionConfig;
+
+    #[test]
+    fn the_lift_line_tells_how_failed_lifts_ended_where_it_was_recorded() {
+        let read = |f: &str| {
+            let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(f);
+            grasp::eval::read_results(&p).unwrap()
+        };
+        // Saved before the record existed: no claim about it.
+        let old = read("docs/results/delay_2026_12/novel_top-down_seed0.json");
+        let line = lift_line(&old[0]);
+        assert!(line.starts_with("gd1_s1: 200 lifts"), "{line}");
+        assert!(!line.contains("failed lifts"), "{line}");
+        // Recorded: the counts and median turns of the file.
+        let new = read("docs/results/squeeze_2026_12/report/novel_top-down_seed0.json");
+        let l = &new[0].lifts;
+        assert!(l.failed_in_hand + l.failed_out_of_hand > 0);
+        let line = lift_line(&new[0]);
+        let want = format!(
+            "failed lifts: {} with the object still in the hand, too low, {} with it out of the hand",
+            l.failed_in_hand, l.failed_out_of_hand
+        );
+        assert!(line.contains(&want), "{line}");
+        assert!(line.ends_with("deg in those that failed\n"), "{line}");
+    }
 
     #[test]
     fn the_grip_note_names_the_scale_the_delay_the_ramp_and_the_squeeze() {
