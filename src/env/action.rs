@@ -151,13 +151,25 @@ pub fn lift_targets(
     finger_limits: &[(f64, f64); 22],
 ) -> [f64; 24] {
     let mut out = *targets;
-    if cfg.lift_squeeze > 0.0 {
-        for (k, (lo, hi)) in finger_limits.iter().enumerate() {
-            let t = targets[k + 2];
-            out[k + 2] = (t + cfg.lift_squeeze * (closed[k + 2] - t)).clamp(*lo, *hi);
+    blend_towards(&mut out[2..], closed, cfg.lift_squeeze, finger_limits);
+    out
+}
+
+/// Moves the 22 finger targets `fingers` the share `w` of the way towards the fingers of
+/// `closed` (paper order, 24 joints), each within its `finger_limits`; nothing with `w`
+/// of 0. The grip's blend ([`hand_targets`]) and the squeeze at the lift
+/// ([`lift_targets`]).
+fn blend_towards(
+    fingers: &mut [f64],
+    closed: &[f64; 24],
+    w: f64,
+    finger_limits: &[(f64, f64); 22],
+) {
+    if w > 0.0 {
+        for ((t, c), (lo, hi)) in fingers.iter_mut().zip(&closed[2..]).zip(finger_limits) {
+            *t = (*t + w * (c - *t)).clamp(*lo, *hi);
         }
     }
-    out
 }
 
 /// Clips a raw policy output to [-1, 1] (NaN becomes 0).
@@ -218,13 +230,12 @@ pub fn hand_targets(
     let theta_f: [f64; 22] = std::array::from_fn(|k| q[k + 2]);
     let d = decode(cfg, std, raw, false);
     let mut target_f = model.target(&theta_f, &d.d_eps, finger_limits);
-    let w = cfg.ramped_grip(d.grip, step);
-    if w > 0.0 {
-        for (k, t) in target_f.iter_mut().enumerate() {
-            let (lo, hi) = finger_limits[k];
-            *t = (*t + w * (closed[k + 2] - *t)).clamp(lo, hi);
-        }
-    }
+    blend_towards(
+        &mut target_f,
+        closed,
+        cfg.ramped_grip(d.grip, step),
+        finger_limits,
+    );
     let mut targets = [0.0; 24];
     for (w, (lo, hi)) in wrist_limits.iter().enumerate() {
         targets[w] = (q[w] + d.d_wrist[w]).clamp(*lo, *hi);

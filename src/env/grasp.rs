@@ -101,17 +101,23 @@ pub struct EpisodeSummary {
 }
 
 impl EpisodeSummary {
+    /// A lift that was judged and failed (no physics failure): either
+    /// [`Self::failed_in_hand`] or [`Self::failed_out_of_hand`].
+    pub fn failed_lift(&self) -> bool {
+        self.lifted && !self.success && !self.physics_failure
+    }
+
     /// A lift that failed with the object still touching the hand, below the success
     /// height (no physics failure): the grasp held the object but tipped it, let it pivot
     /// or slip. See [`Self::failed_out_of_hand`] for the other failed lifts.
     pub fn failed_in_hand(&self) -> bool {
-        self.lifted && !self.success && !self.physics_failure && self.in_hand
+        self.failed_lift() && self.in_hand
     }
 
     /// A lift that failed with the object out of the hand when it was judged (no physics
     /// failure): dropped, or never picked up.
     pub fn failed_out_of_hand(&self) -> bool {
-        self.lifted && !self.success && !self.physics_failure && !self.in_hand
+        self.failed_lift() && !self.in_hand
     }
 }
 

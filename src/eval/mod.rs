@@ -482,7 +482,7 @@ impl LiftStats {
             failed_in_hand: lifted.iter().filter(|e| e.failed_in_hand()).count(),
             failed_out_of_hand: lifted.iter().filter(|e| e.failed_out_of_hand()).count(),
             median_turn_held_deg: median_turn(&|e| e.success),
-            median_turn_failed_deg: median_turn(&|e| e.failed_in_hand() || e.failed_out_of_hand()),
+            median_turn_failed_deg: median_turn(&|e| e.failed_lift()),
         }
     }
 }
