@@ -30,6 +30,22 @@ pub fn within(
     }
 }
 
+/// [`within`] for the half-open range `(lo, hi]`: `Ok` when `lo < v <= hi` (so never for
+/// NaN or an infinite `v`), else the field and "V is outside (LO, HI]UNIT".
+pub fn within_above(
+    field: &'static str,
+    v: f64,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+) -> Result<(), (&'static str, String)> {
+    if v > lo && v <= hi {
+        Ok(())
+    } else {
+        Err((field, format!("{} is outside ({lo}, {hi}]{unit}", short(v))))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -58,5 +74,19 @@ mod tests {
             "NaN is outside [0, 1]"
         );
         assert!(within("a", -0.1, 0.0, 1.0, "").is_err());
+    }
+
+    #[test]
+    fn range_checks_name_the_field_and_the_range() {
+        assert!(within("a", 1.0, 0.0, 1.0, "").is_ok());
+        assert_eq!(
+            within("a", 0.25 + 1.0, 0.0, 1.0, " m"),
+            Err(("a", "1.25 is outside [0, 1] m".to_string()))
+        );
+        assert!(within_above("b", 5.0, 0.0, 5.0, "").is_ok());
+        for v in [0.0, -1.0, 5.5, f64::NAN, f64::INFINITY] {
+            let e = within_above("b", v, 0.0, 5.0, " s").unwrap_err();
+            assert_eq!(e, ("b", format!("{} is outside (0, 5] s", short(v))));
+        }
     }
 }

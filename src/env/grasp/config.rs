@@ -12,6 +12,7 @@ use crate::env::reward::RewardConfig;
 use crate::env::stream::StreamConfig;
 use crate::robot::Posture;
 use crate::sim::SimError;
+use crate::util::num::{within, within_above};
 use serde::{Deserialize, Serialize};
 
 /// What happens when an episode reaches `max_steps` without a lift.
@@ -121,6 +122,14 @@ pub enum GraspEnvError {
     Sim(#[from] SimError),
 }
 
+/// The `(field, message)` of a config section's range check ([`within`] and the
+/// sections' own `validate`) as the environment's config error.
+impl From<(&'static str, String)> for GraspEnvError {
+    fn from((field, message): (&'static str, String)) -> Self {
+        GraspEnvError::Config { field, message }
+    }
+}
+
 impl EnvConfig {
     /// The observation layout of this MDP for `n` synergy components: the modality's
     /// frames (the previous action with the grip's value when there is one), then the
@@ -156,18 +165,8 @@ impl EnvConfig {
         if self.max_steps == 0 {
             return bad("max_steps", "must be at least 1".into());
         }
-        within(
-            "grasp_depth",
-            self.grasp_depth,
-            self.grasp_depth.is_finite() && (0.0..=0.2).contains(&self.grasp_depth),
-            "[0, 0.2] m",
-        )?;
-        within(
-            "closing_time",
-            self.closing_time,
-            self.closing_time > 0.0 && self.closing_time <= 10.0,
-            "(0, 10] s",
-        )?;
+        within("grasp_depth", self.grasp_depth, 0.0, 0.2, " m")?;
+        within_above("closing_time", self.closing_time, 0.0, 10.0, " s")?;
         // At least 1 ms: a tiny period passes `> 0` but never finishes stage 1.
         if !(self.closing_period >= 1e-3 && self.closing_period <= self.closing_time) {
             return bad(
@@ -178,36 +177,12 @@ impl EnvConfig {
                 ),
             );
         }
-        within(
-            "action.eps_scale",
-            self.action.eps_scale,
-            self.action.eps_scale > 0.0 && self.action.eps_scale <= 5.0,
-            "(0, 5]",
-        )?;
-        within(
-            "action.wrist_scale",
-            self.action.wrist_scale,
-            self.action.wrist_scale >= 0.0 && self.action.wrist_scale <= 0.5,
-            "[0, 0.5] rad",
-        )?;
-        within(
-            "action.grip_scale",
-            self.action.grip_scale,
-            (0.0..=1.0).contains(&self.action.grip_scale),
-            "[0, 1]",
-        )?;
-        within(
-            "action.grip_ramp",
-            self.action.grip_ramp,
-            (0.0..=1.0).contains(&self.action.grip_ramp),
-            "[0, 1]",
-        )?;
-        within(
-            "action.lift_squeeze",
-            self.action.lift_squeeze,
-            (0.0..=1.0).contains(&self.action.lift_squeeze),
-            "[0, 1]",
-        )?;
+        let a = &self.action;
+        within_above("action.eps_scale", a.eps_scale, 0.0, 5.0, "")?;
+        within("action.wrist_scale", a.wrist_scale, 0.0, 0.5, " rad")?;
+        within("action.grip_scale", a.grip_scale, 0.0, 1.0, "")?;
+        within("action.grip_ramp", a.grip_ramp, 0.0, 1.0, "")?;
+        within("action.lift_squeeze", a.lift_squeeze, 0.0, 1.0, "")?;
         if self.action.grip_ramp > 0.0 && self.action.grip_scale == 0.0 {
             return bad(
                 "action.grip_ramp",
@@ -233,19 +208,11 @@ impl EnvConfig {
             return bad("curriculum.fixed_rate", "must be in [0, 1]".into());
         }
         if self.object_curriculum.enabled {
-            if let Err((field, message)) = self.object_curriculum.validate() {
-                return bad(field, message);
-            }
+            self.object_curriculum.validate()?;
         }
-        if let Err((field, message)) = self.randomization.validate() {
-            return bad(field, message);
-        }
-        if let Err((field, message)) = self.reward.validate() {
-            return bad(field, message);
-        }
-        if let Err((field, message)) = self.placement.validate() {
-            return bad(field, message);
-        }
+        self.randomization.validate()?;
+        self.reward.validate()?;
+        self.placement.validate()?;
         if self.stream.reuse == 0 {
             return bad("stream.reuse", "must be at least 1".into());
         }
@@ -257,17 +224,5 @@ impl EnvConfig {
                 format!("unknown posture '{other}': expected open or c-shape"),
             ),
         }
-    }
-}
-
-/// `Ok` when `ok`, else the error naming `field`: "`value` is outside `range`".
-fn within(field: &'static str, value: f64, ok: bool, range: &str) -> Result<(), GraspEnvError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(GraspEnvError::Config {
-            field,
-            message: format!("{} is outside {range}", crate::util::num::short(value)),
-        })
     }
 }
