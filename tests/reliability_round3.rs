@@ -512,11 +512,14 @@ fn unclear_errors_name_the_value_and_what_is_valid() {
         "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS 3\nDATA ascii\n\
          0 0 0\n0.01 0 0\n0 0.01 0\n",
     );
-    let o = grasp(&["run", "--cloud", s(&small)]);
+    let log = dir.path().join("attempt.jsonl");
+    let o = grasp(&["run", "--cloud", s(&small), "--log", s(&log)]);
     assert_fails(
         &o,
         &["the point cloud has only 3 points: at least 15 are needed"],
     );
+    // The run failed before its first step: no empty log is left behind.
+    assert!(!log.exists(), "an empty attempt log was left at {log:?}");
     let ply = write(
         dir.path(),
         "v9.ply",

@@ -103,11 +103,16 @@ pub enum LogRecord {
 }
 
 /// An append-only JSON-lines attempt log, flushed after every line.
+///
+/// A log file that this handle created and never wrote to is removed when the handle is
+/// dropped, so a run that fails before its first step (a cloud with no grasp, say)
+/// leaves no empty file behind; a file that existed before is never removed.
 #[derive(Debug)]
 pub struct AttemptLog {
     path: PathBuf,
     file: File,
     lines: u64,
+    created: bool,
 }
 
 impl AttemptLog {
@@ -120,15 +125,23 @@ impl AttemptLog {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(io)?;
         }
-        let file = std::fs::OpenOptions::new()
-            .create(true)
+        let append = || std::fs::OpenOptions::new().append(true).open(path);
+        let (file, created) = match std::fs::OpenOptions::new()
             .append(true)
+            .create_new(true)
             .open(path)
-            .map_err(io)?;
+        {
+            Ok(f) => (f, true),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                (append().map_err(io)?, false)
+            }
+            Err(e) => return Err(io(e)),
+        };
         Ok(AttemptLog {
             path: path.to_path_buf(),
             file,
             lines: 0,
+            created,
         })
     }
 
@@ -182,6 +195,15 @@ impl AttemptLog {
             path: self.path.clone(),
             source,
         })
+    }
+}
+
+impl Drop for AttemptLog {
+    fn drop(&mut self) {
+        if self.created && self.lines == 0 {
+            // Best effort: an empty file left behind is harmless, only untidy.
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
 }
 
@@ -288,6 +310,27 @@ mod tests {
             .nth(2)
             .unwrap()
             .starts_with(r#"{"kind":"outcome""#));
+    }
+
+    #[test]
+    fn an_unwritten_log_is_removed_only_when_this_handle_made_it() {
+        let dir = tempfile::tempdir().unwrap();
+        // Made here, nothing written: gone when dropped.
+        let p = dir.path().join("new.jsonl");
+        drop(AttemptLog::open(&p).unwrap());
+        assert!(!p.exists());
+        // Made here and written to: kept.
+        let mut log = AttemptLog::open(&p).unwrap();
+        log.step(step(0)).unwrap();
+        drop(log);
+        assert_eq!(read_log(&p).unwrap().len(), 1);
+        // There before (even empty), nothing written: kept as it was.
+        drop(AttemptLog::open(&p).unwrap());
+        assert_eq!(read_log(&p).unwrap().len(), 1);
+        let empty = dir.path().join("empty.jsonl");
+        std::fs::write(&empty, "").unwrap();
+        drop(AttemptLog::open(&empty).unwrap());
+        assert!(empty.exists());
     }
 
     #[test]
