@@ -1,0 +1,136 @@
+//! The results as tables: [`markdown_table`] in the layout of the paper's Table I, and
+//! [`csv_table`] with one row per (agent, object).
+
+use super::AgentResult;
+
+/// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
+/// the mean. Rates in percent. When any episode ended in a physics failure, a last column
+/// counts them per agent.
+pub fn markdown_table(results: &[AgentResult]) -> String {
+    let Some(first) = results.first() else {
+        return String::new();
+    };
+    let mut s = String::from("| agent |");
+    for o in &first.objects {
+        s.push_str(&format!(" {} |", o.object));
+    }
+    let failures = results.iter().any(|r| r.physics_failures > 0);
+    s.push_str(" mean | 95 % CI | steps |");
+    if failures {
+        s.push_str(" physics failures |");
+    }
+    s.push_str("\n|---|");
+    for _ in &first.objects {
+        s.push_str("---|");
+    }
+    s.push_str(if failures {
+        "---|---|---|---|\n"
+    } else {
+        "---|---|---|\n"
+    });
+    for r in results {
+        s.push_str(&format!("| {} |", r.agent));
+        for o in &r.objects {
+            s.push_str(&format!(" {:.0} |", 100.0 * o.rate));
+        }
+        s.push_str(&format!(
+            " {:.1} | {:.1}-{:.1} | {:.2} |",
+            100.0 * r.mean_rate,
+            100.0 * r.ci95.0,
+            100.0 * r.ci95.1,
+            r.mean_steps
+        ));
+        if failures {
+            s.push_str(&format!(" {} |", r.physics_failures));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// CSV with one row per (agent, object).
+pub fn csv_table(results: &[AgentResult]) -> String {
+    let mut s = String::from(
+        "agent,object,trials,successes,rate,ci95_low,ci95_high,mean_steps,physics_failures\n",
+    );
+    for r in results {
+        for o in &r.objects {
+            s.push_str(&format!(
+                "{},{},{},{},{:.4},{:.4},{:.4},{:.3},{}\n",
+                r.agent.replace(',', ";"),
+                o.object,
+                o.trials,
+                o.successes,
+                o.rate,
+                o.ci95.0,
+                o.ci95.1,
+                o.mean_steps,
+                o.physics_failures
+            ));
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::{wilson, ContactStats, LiftStats, ObjectResult};
+    use std::collections::BTreeMap;
+
+    #[test]
+    fn tables_have_one_row_per_agent_and_object() {
+        let r = AgentResult {
+            agent: "Baseline 1".into(),
+            objects: vec![ObjectResult {
+                object: "box".into(),
+                trials: 10,
+                successes: 8,
+                rate: 0.8,
+                ci95: wilson(8, 10),
+                mean_steps: 1.0,
+                physics_failures: 0,
+                outcomes: vec![true; 8].into_iter().chain([false; 2]).collect(),
+                deepest_contacts: vec![0.0; 10],
+                deepest_contacts_with: Vec::new(),
+                failures: Vec::new(),
+                attempts: Vec::new(),
+                failed_in_hand: 0,
+                failed_out_of_hand: 0,
+                lift_heights: Vec::new(),
+                lift_turns: Vec::new(),
+            }],
+            mean_rate: 0.8,
+            ci95: wilson(8, 10),
+            mean_steps: 1.0,
+            control_steps_per_s: 3.0,
+            physics_failures: 0,
+            failures_by_kind: BTreeMap::new(),
+            penetrations_by_body: BTreeMap::new(),
+            deepest_contact: ContactStats::default(),
+            over_1cm_by_body: Default::default(),
+            lifts: LiftStats::default(),
+            wall_s: 1.0,
+            pregrasp: None,
+            conditions: None,
+            retries: None,
+            seed: None,
+            recordings: Vec::new(),
+        };
+        let md = markdown_table(std::slice::from_ref(&r));
+        assert!(
+            md.contains("| Baseline 1 | 80 | 80.0 | 49.0-94.3 | 1.00 |\n"),
+            "{md}"
+        );
+        assert!(!md.contains("physics"), "{md}");
+        let mut broken = r.clone();
+        broken.physics_failures = 1;
+        broken.objects[0].physics_failures = 1;
+        let md = markdown_table(std::slice::from_ref(&broken));
+        assert!(md.contains("| steps | physics failures |"), "{md}");
+        assert!(md.contains("| 1.00 | 1 |\n"), "{md}");
+        let csv = csv_table(&[r]);
+        assert_eq!(csv.lines().count(), 2);
+        assert!(csv.contains("Baseline 1,box,10,8,0.8000"));
+    }
+}
