@@ -120,7 +120,7 @@ pub struct TrainConfig {
     pub best_window: usize,
     /// Stop cleanly (with a checkpoint) after this much wall time, if set.
     pub time_budget_minutes: Option<f64>,
-    /// The object set: `"primitives"` ([`super::objects::primitives`]), `"procedural"`
+    /// The object set: `"primitives"` ([`crate::train::objects::primitives`]), `"procedural"`
     /// (the procedural object stream: a fresh object every `env.stream.reuse` episodes,
     /// see [`crate::env::stream`]) or anything `--objects` accepts (`train`, `unseen`, a
     /// folder, a manifest, names).

@@ -2,7 +2,7 @@
 //! Sec. IV, and a textbook control task to prove the learner.
 //!
 //! - [`api`]: the `Env` trait and the parallel `VecEnv`.
-//! - [`bench`]: the random-agent throughput of a `VecEnv`.
+//! - [`bench`](mod@bench): the random-agent throughput of a `VecEnv`.
 //! - [`action`]: decoding and scaling of the policy output.
 //! - [`obs`]: the observation frame `<a_{k-1}, phi, tau, theta>`, modalities, history.
 //! - [`reward`]: eq. 4 and eq. 5.

@@ -1,7 +1,7 @@
 //! Evaluation under perturbed conditions: `grasp eval --perturb FILE`.
 //!
 //! By default an evaluation judges every agent on unrandomised objects and sensors, its
-//! hand placed as `--pregrasp` says (see [`super::checkpoint_setup`]). A conditions file
+//! hand placed as `--pregrasp` says (see [`crate::checkpoint::checkpoint_setup`]). A conditions file
 //! instead applies, to every agent alike, a training config's start-pose perturbations
 //! (`[placement]`, the schema of `[env.placement]`) and object and sensor randomisation
 //! (`[randomization]`, the schema of `[env.randomization]`):

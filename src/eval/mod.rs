@@ -3,7 +3,7 @@
 //! layout of the paper's Table I.
 //!
 //! - [`evaluate`]: one agent on every object of a set, trials seeded per (object, trial);
-//! - [`checkpoint_setup`]: the environment a checkpoint was trained in, read from the
+//! - [`checkpoint_setup`](crate::checkpoint::checkpoint_setup): the environment a checkpoint was trained in, read from the
 //!   `config.toml` saved beside it, so evaluations observe what the policy expects;
 //! - [`paired`](mod@paired): two agents compared trial by trial (exact McNemar test);
 //! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);

@@ -26,7 +26,7 @@ pub struct RunRow {
     pub transitions: u64,
     /// Training wall time so far (s).
     pub wall_s: f64,
-    /// Final training success ([`curves::final_success`]).
+    /// Final training success ([`super::curves::final_success`]).
     pub final_success: Option<f64>,
     /// Success of the evaluation, when run.
     pub eval_success: Option<f64>,

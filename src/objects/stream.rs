@@ -239,7 +239,7 @@ fn fits(e: [f64; 3]) -> bool {
 }
 
 /// Object `index` of stream `seed` (see the module docs). Never fails: after
-/// [`MAX_DRAWS`] rejected draws it is a 5 x 5 x 8 cm box.
+/// `MAX_DRAWS` rejected draws it is a 5 x 5 x 8 cm box.
 pub fn stream_spec(seed: u64, index: u64) -> ResolvedSpec {
     draw_object(seed, index).0
 }

@@ -33,7 +33,7 @@
 //!
 //! # Fingertips
 //! A ball (or the 0.2 mm capsule a fingertip is simulated as) against a convex hull gets
-//! its contact computed exactly from the hull's faces instead ([`point_hull_distance`]):
+//! its contact computed exactly from the hull's faces instead (`point_hull_distance`):
 //! parry's GJK puts points up to 17 mm from where they are on the object hulls.
 //!
 //! # The table

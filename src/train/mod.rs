@@ -11,7 +11,7 @@
 //! - `learning_curve.svg`: success rate and return against transitions ([`plot`]).
 //!
 //! [`envs`] builds a config's environments (the Python module builds its own there too);
-//! [`files`] names the files of a run folder and of a checkpoint folder.
+//! [`files`](crate::checkpoint::files) names the files of a run folder and of a checkpoint folder.
 //!
 //! Every file is replaced atomically, so a run killed at any moment (even `kill -9`) can be
 //! continued with [`TrainSession::open`]`(.., resume = true)`: the metrics rows after the

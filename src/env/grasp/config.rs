@@ -50,7 +50,7 @@ pub struct EnvConfig {
     /// rounded to whole physics steps: with the default 0.02 s at 1/240 s that is 5 steps
     /// (0.0208 s), so the default's 75 updates take 1.5625 s.
     pub closing_period: f64,
-    /// Where stage 1's closing trajectory T interpolates (see [`super::closing`]).
+    /// Where stage 1's closing trajectory T interpolates (see [`crate::env::closing`]).
     pub closing: ClosingSpace,
     /// What happens at `max_steps` without a lift.
     pub at_max_steps: AtMaxSteps,
@@ -59,7 +59,7 @@ pub struct EnvConfig {
     /// Curriculum (eq. 6); each environment keeps its own window.
     pub curriculum: CurriculumConfig,
     /// Object curriculum (beyond the paper, off by default): training objects drawn by
-    /// their recent failure rate ([`super::object_curriculum`]); evaluation turns it off.
+    /// their recent failure rate ([`crate::env::object_curriculum`]); evaluation turns it off.
     pub object_curriculum: ObjectCurriculumConfig,
     /// Per-episode domain randomisation (off by default; evaluation turns it off).
     pub randomization: Randomization,
@@ -68,11 +68,11 @@ pub struct EnvConfig {
     /// Shaped reward terms beyond eq. 4-5 (all off by default).
     pub reward: RewardConfig,
     /// Asymmetric critic (beyond the paper, off by default): the observation ends with
-    /// [`super::obs::critic_state`], privileged simulator state that only the critic
+    /// [`crate::env::obs::critic_state`], privileged simulator state that only the critic
     /// reads; the actor keeps the modality's observation.
     pub critic_state: bool,
     /// Where training episodes start the hand (beyond the paper, off by default; see
-    /// [`super::placement`]); evaluation turns it off.
+    /// [`crate::env::placement`]); evaluation turns it off.
     pub placement: PlacementConfig,
 }
 

@@ -6,7 +6,7 @@ use super::*;
 
 impl HandSim {
     /// The object body's origin in the world (m): the centre of its bounding box (see
-    /// [`super::object`]); `rest_height()` above the table top when it rests upright.
+    /// [`crate::sim::object`]); `rest_height()` above the table top when it rests upright.
     pub fn object_position(&self) -> Vector3<f64> {
         self.sets
             .bodies
