@@ -231,16 +231,9 @@ mod tests {
                     rate: k as f64 / o.len() as f64,
                     ci95: wilson(k, o.len()),
                     mean_steps: 1.0,
-                    physics_failures: 0,
                     outcomes: o.to_vec(),
                     deepest_contacts: vec![0.0; o.len()],
-                    deepest_contacts_with: Vec::new(),
-                    failures: Vec::new(),
-                    attempts: Vec::new(),
-                    failed_in_hand: 0,
-                    failed_out_of_hand: 0,
-                    lift_heights: Vec::new(),
-                    lift_turns: Vec::new(),
+                    ..Default::default()
                 }
             })
             .collect();
@@ -251,18 +244,8 @@ mod tests {
             ci95: (0.0, 1.0),
             mean_steps: 1.0,
             control_steps_per_s: 1.0,
-            physics_failures: 0,
-            failures_by_kind: Default::default(),
-            penetrations_by_body: Default::default(),
-            deepest_contact: Default::default(),
-            over_1cm_by_body: Default::default(),
-            lifts: crate::eval::LiftStats::default(),
             wall_s: 1.0,
-            pregrasp: None,
-            conditions: None,
-            retries: None,
-            seed: None,
-            recordings: Vec::new(),
+            ..Default::default()
         }
     }
 

@@ -303,7 +303,7 @@ pub fn write_per_object_plot(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::{wilson, LiftStats, ObjectResult};
+    use crate::eval::{wilson, ObjectResult};
 
     fn agent(name: &str, objects: &[(&str, usize)], trials: usize) -> AgentResult {
         let objects: Vec<ObjectResult> = objects
@@ -315,16 +315,9 @@ mod tests {
                 rate: k as f64 / trials as f64,
                 ci95: wilson(k, trials),
                 mean_steps: 1.0,
-                physics_failures: 0,
                 outcomes: (0..trials).map(|t| t < k).collect(),
                 deepest_contacts: vec![0.0; trials],
-                deepest_contacts_with: Vec::new(),
-                failures: Vec::new(),
-                attempts: Vec::new(),
-                failed_in_hand: 0,
-                failed_out_of_hand: 0,
-                lift_heights: Vec::new(),
-                lift_turns: Vec::new(),
+                ..Default::default()
             })
             .collect();
         let k: usize = objects.iter().map(|o| o.successes).sum();
@@ -336,18 +329,8 @@ mod tests {
             objects,
             mean_steps: 1.0,
             control_steps_per_s: 1.0,
-            physics_failures: 0,
-            failures_by_kind: Default::default(),
-            penetrations_by_body: Default::default(),
-            deepest_contact: Default::default(),
-            over_1cm_by_body: Default::default(),
-            lifts: LiftStats::default(),
             wall_s: 1.0,
-            pregrasp: None,
-            conditions: None,
-            retries: None,
-            seed: None,
-            recordings: Vec::new(),
+            ..Default::default()
         }
     }
 

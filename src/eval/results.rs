@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Per-object result of one agent.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct ObjectResult {
     /// Object name.
     pub object: String,
@@ -128,7 +128,7 @@ pub fn over_1cm_by_body(objects: &[ObjectResult]) -> BTreeMap<String, usize> {
 }
 
 /// All results of one agent.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct AgentResult {
     /// Agent label.
     pub agent: String,

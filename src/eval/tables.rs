@@ -75,8 +75,7 @@ pub fn csv_table(results: &[AgentResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::{wilson, ContactStats, LiftStats, ObjectResult};
-    use std::collections::BTreeMap;
+    use crate::eval::{wilson, ObjectResult};
 
     #[test]
     fn tables_have_one_row_per_agent_and_object() {
@@ -89,33 +88,16 @@ mod tests {
                 rate: 0.8,
                 ci95: wilson(8, 10),
                 mean_steps: 1.0,
-                physics_failures: 0,
                 outcomes: vec![true; 8].into_iter().chain([false; 2]).collect(),
                 deepest_contacts: vec![0.0; 10],
-                deepest_contacts_with: Vec::new(),
-                failures: Vec::new(),
-                attempts: Vec::new(),
-                failed_in_hand: 0,
-                failed_out_of_hand: 0,
-                lift_heights: Vec::new(),
-                lift_turns: Vec::new(),
+                ..Default::default()
             }],
             mean_rate: 0.8,
             ci95: wilson(8, 10),
             mean_steps: 1.0,
             control_steps_per_s: 3.0,
-            physics_failures: 0,
-            failures_by_kind: BTreeMap::new(),
-            penetrations_by_body: BTreeMap::new(),
-            deepest_contact: ContactStats::default(),
-            over_1cm_by_body: Default::default(),
-            lifts: LiftStats::default(),
             wall_s: 1.0,
-            pregrasp: None,
-            conditions: None,
-            retries: None,
-            seed: None,
-            recordings: Vec::new(),
+            ..Default::default()
         };
         let md = markdown_table(std::slice::from_ref(&r));
         assert!(
