@@ -125,7 +125,14 @@ impl AttemptLog {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(io)?;
         }
-        let append = || std::fs::OpenOptions::new().append(true).open(path);
+        // `create` here too: a dangling symbolic link at `path` is "already there" for
+        // `create_new`, and its target is made as before (and kept).
+        let append = || {
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(path)
+        };
         let (file, created) = match std::fs::OpenOptions::new()
             .append(true)
             .create_new(true)
@@ -331,6 +338,17 @@ mod tests {
         std::fs::write(&empty, "").unwrap();
         drop(AttemptLog::open(&empty).unwrap());
         assert!(empty.exists());
+        // A dangling symbolic link is followed and its target made, as before.
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("link.jsonl");
+            let target = dir.path().join("target.jsonl");
+            std::os::unix::fs::symlink(&target, &link).unwrap();
+            let mut log = AttemptLog::open(&link).unwrap();
+            log.step(step(0)).unwrap();
+            drop(log);
+            assert_eq!(read_log(&target).unwrap().len(), 1);
+        }
     }
 
     #[test]
