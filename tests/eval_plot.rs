@@ -228,3 +228,67 @@ fn the_saved_unseen_evaluation_plots_at_19_objects() {
         assert_eq!(texts(&svg, object), 1, "{object}");
     }
 }
+
+#[test]
+fn saved_seeds_pool_into_one_evaluation_with_its_paired_test_and_plot() {
+    let d = "docs/results/pregrasp_views_2026_12";
+    let files = format!(
+        "{d}/unseen_antipodal_seed0.json,{d}/unseen_antipodal_seed1.json,{d}/unseen_antipodal_seed2.json"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("pooled.svg");
+    let o = grasp(&[
+        "eval",
+        "--from-json",
+        &files,
+        "--policy",
+        "pca8,b1",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The three seeds' trials of the 8-synergy agent and baseline 1, 60 per object.
+    assert!(out.contains("pca8: mean success 97.7 %"), "{out}");
+    assert!(out.contains("b1: mean success 90.2 %"), "{out}");
+    assert!(
+        out.contains(
+            "pca8 vs b1 on identical start poses: only the first won 98 trials, only the second 12"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("/60"), "{out}");
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert_well_formed(&plot);
+    assert!(plot.contains("60 trials"), "{plot}");
+    // Files that recorded the lifts' turns: the held lifts' median pooled, the failed
+    // lifts' left to each file.
+    let r = "docs/results/squeeze_2026_12/report";
+    let o = grasp(&[
+        "eval",
+        "--from-json",
+        &format!("{r}/novel_top-down_seed0.json,{r}/novel_top-down_seed1.json"),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("deg in the lifts that held it (the failed lifts' median is in each file)"),
+        "{out}"
+    );
+
+    // Seeds that would not pair are refused, naming the file.
+    let twice = format!("{d}/unseen_antipodal_seed0.json,{d}/unseen_antipodal_seed0.json");
+    let o = grasp(&["eval", "--from-json", &twice]);
+    assert_fails(&o, 1, &["unseen_antipodal_seed0.json", "seed 0 twice"]);
+    let mixed = format!(
+        "{d}/unseen_antipodal_seed0.json,docs/results/fig5_2026_12/pca8/unseen_top-down_seed1.json"
+    );
+    let o = grasp(&["eval", "--from-json", &mixed, "--policy", "pca8"]);
+    assert_fails(
+        &o,
+        1,
+        &["unseen_top-down_seed1.json", "placement top-down here"],
+    );
+    let o = grasp(&["eval", "--from-json", &files, "--policy", "nobody"]);
+    assert_fails(&o, 1, &["the files hold no agent 'nobody'", "pca8"]);
+}

@@ -30,7 +30,10 @@ use super::Global;
 /// Evaluate agents per object on identical initial poses and print a Table-I-style table.
 #[derive(Debug, Args)]
 #[command(
-    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n  grasp eval --policy assets/policies/quick_gru_m3_pca5,baseline1,baseline2 --objects unseen --trials 20 --plot unseen.svg\n  grasp eval --from-json eval.json --policy baseline1,baseline2 --labels B1,B2 --plot b.svg\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint.\n\nWith several agents, the first is also compared with each other one trial by trial (every\nagent sees the same start poses): the counts of trials only one of them won and the exact\nMcNemar p-value. --json gives each trial's outcome per object.\n\n--plot draws the per-object success of every agent side by side (horizontal bars with Wilson\n95 % intervals, each agent's mean first, objects sorted by the first agent's margin over the\nbest other agent). --from-json reads the --json output of an earlier evaluation instead of\nrunning one, and prints, compares and plots it again; --policy then picks agents of the file\nby name (baseline1, baseline2 or the name in the file)."
+    after_help = "Examples:\n  grasp eval --policy baseline1,baseline2 --objects unseen --trials 10 --markdown\n  grasp eval --policy runs/quick/checkpoints/best --policy baseline2 --objects train --csv table.csv\n  grasp eval --policy assets/policies/quick_gru_m3_pca5 --objects unseen --json\n  grasp eval --policy baseline2 --objects box_sugar --trials 2 --record rec/\n  grasp eval --policy assets/policies/quick_gru_m3_pca5,baseline1,baseline2 --objects unseen --trials 20 --plot unseen.svg\n  grasp eval --from-json eval.json --policy baseline1,baseline2 --labels B1,B2 --plot b.svg\n  grasp eval --from-json seed0.json,seed1.json,seed2.json --markdown\n\nCheckpoints are evaluated in the setup saved beside them (config.toml: modality,\ncomponents, history, action scales; synergy.json); --modality and --components apply to\nbaselines, and an error is raised when they contradict a checkpoint.\n\nWith several agents, the first is also compared with each other one trial by trial (every\nagent sees the same start poses): the counts of trials only one of them won and the exact\nMcNemar p-value. --json gives each trial's outcome per object.\n\n--plot draws the per-object success of every agent side by side (horizontal bars with Wilson\n95 % intervals, each agent's mean first, objects sorted by the first agent's margin over the\nbest other agent). --from-json reads the --json output of an earlier evaluation instead of\nrunning one, and prints, compares and plots it again; --policy then picks agents of the file\nby name (baseline1, baseline2 or the name in the file). Several files (e.g. --seed 0, 1 and 2 of
+the same evaluation) are pooled into one evaluation of their trials: each agent's trials are
+joined in the files' order, so agents stay paired trial by trial; their seeds, placement,
+attempts and objects are checked."
 )]
 pub struct EvalArgs {
     /// Agents: baseline1, baseline2, or a checkpoint folder; repeat or separate by commas.
@@ -38,9 +41,11 @@ pub struct EvalArgs {
     #[arg(long, value_delimiter = ',', required_unless_present = "from_json")]
     pub policy: Vec<String>,
     /// Read the results of an earlier `grasp eval --json` from this file instead of
-    /// evaluating: print, compare and plot them again.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb", "attempts", "rank_top", "ranker"])]
-    pub from_json: Option<PathBuf>,
+    /// evaluating: print, compare and plot them again. Several files (repeat or separate by
+    /// commas), e.g. one per seed of scenes, are pooled: each agent's trials joined in the
+    /// files' order (the same agents on the same objects, each seed once).
+    #[arg(long, value_name = "FILE", value_delimiter = ',', conflicts_with_all = ["objects", "trials", "stochastic", "synergy", "components", "modality", "difficulty", "sim_config", "threads", "record", "pregrasp", "perturb", "attempts", "rank_top", "ranker"])]
+    pub from_json: Vec<PathBuf>,
     /// Draw the per-object success of every agent (Wilson 95 % intervals, means) to this
     /// SVG file.
     #[arg(long, value_name = "FILE.svg")]
@@ -358,17 +363,24 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("--csv {}: {}", p.display(), e.source))?;
     }
     check_labels(&a)?;
-    let (mut results, title) = match &a.from_json {
-        Some(f) => (
-            saved(&a, f)?,
-            format!("Per-object success, {}", f.display()),
-        ),
-        None => (
+    let (mut results, title) = match a.from_json.as_slice() {
+        [] => (
             measure(&a, g)?,
             format!(
                 "Per-object success on '{}', seed {}",
                 a.objects,
                 g.seed.unwrap_or(0)
+            ),
+        ),
+        files => (
+            saved(&a, files)?,
+            format!(
+                "Per-object success, {}",
+                files
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" + ")
             ),
         ),
     };
@@ -415,7 +427,7 @@ fn check_labels(a: &EvalArgs) -> Result<()> {
             bail!("--labels: '{l}' is given twice; each agent needs its own name");
         }
     }
-    if a.from_json.is_none() && !a.labels.is_empty() && a.labels.len() != a.policy.len() {
+    if a.from_json.is_empty() && !a.labels.is_empty() && a.labels.len() != a.policy.len() {
         bail!(
             "--labels names {} agents, but --policy gives {}: {}",
             a.labels.len(),
@@ -426,32 +438,56 @@ fn check_labels(a: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-/// The agents of an earlier `grasp eval --json` in `file`: those named by --policy, in
-/// that order, or all.
-fn saved(a: &EvalArgs, file: &std::path::Path) -> Result<Vec<AgentResult>> {
-    let all = read_results(file)?;
-    if a.policy.is_empty() {
+/// The agents of earlier `grasp eval --json` evaluations in `files` (pooled when several:
+/// [`grasp::eval::pool`]): those named by --policy, in that order, or all.
+fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
+    let wanted: Vec<String> = a
+        .policy
+        .iter()
+        .map(|p| match p.as_str() {
+            "baseline1" => AgentSpec::Baseline1.label(),
+            "baseline2" => AgentSpec::Baseline2.label(),
+            other => other.to_string(),
+        })
+        .collect();
+    let mut read = Vec::with_capacity(files.len());
+    let mut held: Vec<String> = Vec::new();
+    for f in files {
+        let mut agents = read_results(f)?;
+        for r in &agents {
+            if !held.contains(&r.agent) {
+                held.push(r.agent.clone());
+            }
+        }
+        if !wanted.is_empty() {
+            agents.retain(|r| wanted.contains(&r.agent));
+        }
+        read.push((f.clone(), agents));
+    }
+    let all = grasp::eval::pool::pool(&read)?;
+    if wanted.is_empty() {
         return Ok(all);
     }
-    a.policy
+    let source = match files {
+        [f] => f.display().to_string(),
+        _ => "the files".to_string(),
+    };
+    wanted
         .iter()
-        .map(|p| {
-            let name = match p.as_str() {
-                "baseline1" => AgentSpec::Baseline1.label(),
-                "baseline2" => AgentSpec::Baseline2.label(),
-                other => other.to_string(),
-            };
+        .map(|name| {
             all.iter()
-                .find(|r| r.agent == name)
+                .find(|r| &r.agent == name)
                 .cloned()
                 .with_context(|| {
                     format!(
-                        "{} holds no agent '{name}'; it holds: {}",
-                        file.display(),
-                        all.iter()
-                            .map(|r| r.agent.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
+                        "{source} {} no agent '{name}'; {}: {}",
+                        if files.len() == 1 { "holds" } else { "hold" },
+                        if files.len() == 1 {
+                            "it holds"
+                        } else {
+                            "they hold"
+                        },
+                        held.join(", ")
                     )
                 })
         })
@@ -873,13 +909,24 @@ fn lift_line(r: &grasp::eval::AgentResult) -> String {
     if r.objects.iter().any(|o| !o.lift_turns.is_empty()) {
         line += &format!(
             "; failed lifts: {} with the object still in the hand, too low, {} with it out \
-             of the hand; the object turned by a median {:.0} deg in the lifts that held it, \
-             {:.0} deg in those that failed",
-            l.failed_in_hand,
-            l.failed_out_of_hand,
-            l.median_turn_held_deg,
-            l.median_turn_failed_deg
+             of the hand",
+            l.failed_in_hand, l.failed_out_of_hand,
         );
+        match (l.median_turn_held_deg, l.median_turn_failed_deg) {
+            (Some(held), Some(failed)) => {
+                line += &format!(
+                    "; the object turned by a median {held:.0} deg in the lifts that held it, \
+                     {failed:.0} deg in those that failed"
+                )
+            }
+            (Some(held), None) => {
+                line += &format!(
+                    "; the object turned by a median {held:.0} deg in the lifts that held it \
+                     (the failed lifts' median is in each file)"
+                )
+            }
+            _ => {}
+        }
     }
     line + "\n"
 }

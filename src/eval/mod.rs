@@ -9,6 +9,7 @@
 //! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
 //! - [`plot`]: Table I as a picture, per-object success of the agents side by side;
 //! - [`read_results`]: the results of an earlier `grasp eval --json`, to print or plot again;
+//! - [`pool`](mod@pool): several such files (seeds of scenes) read as one evaluation;
 //! - [`regression`]: the CI regression check against committed reference figures.
 //!
 //! The learned agent ([`PolicyAgent`], [`AgentSpec`]) is in `agent.rs`, the result types
@@ -18,6 +19,7 @@
 pub mod conditions;
 pub mod paired;
 pub mod plot;
+pub mod pool;
 pub mod rank;
 pub mod record;
 pub mod regression;

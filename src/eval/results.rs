@@ -251,12 +251,14 @@ pub struct LiftStats {
     /// Median turn of the object during the lifts that held it, and during those that
     /// failed (degrees; 0 when there were none): a grasp that pins the object keeps it
     /// small, one the object tips or pivots in does not
-    /// ([`EpisodeSummary::object_turn`]).
-    #[serde(default)]
-    pub median_turn_held_deg: f64,
+    /// ([`EpisodeSummary::object_turn`]). Absent in evaluations saved before it was
+    /// recorded, and for failed lifts in results pooled over several files
+    /// ([`pool`](super::pool)), which keep no per-trial record of which trials lifted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub median_turn_held_deg: Option<f64>,
     /// See `median_turn_held_deg`.
-    #[serde(default)]
-    pub median_turn_failed_deg: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub median_turn_failed_deg: Option<f64>,
 }
 
 impl LiftStats {
@@ -297,8 +299,8 @@ impl LiftStats {
             mean_grip_dropped: mean(&|e| !e.success),
             failed_in_hand: lifted.iter().filter(|e| e.failed_in_hand()).count(),
             failed_out_of_hand: lifted.iter().filter(|e| e.failed_out_of_hand()).count(),
-            median_turn_held_deg: median_turn(&|e| e.success),
-            median_turn_failed_deg: median_turn(&|e| e.failed_lift()),
+            median_turn_held_deg: Some(median_turn(&|e| e.success)),
+            median_turn_failed_deg: Some(median_turn(&|e| e.failed_lift())),
         }
     }
 }
@@ -501,9 +503,16 @@ mod tests {
         assert!((s.mean_grip_dropped - 2.0).abs() < 1e-12);
         assert_eq!((s.failed_in_hand, s.failed_out_of_hand), (1, 1));
         // Turns of grip / 10 rad: held 0.4 and 0.2 (median 0.3), failed 0.1 and 0.3 (0.2).
-        assert!((s.median_turn_held_deg - 0.3f64.to_degrees()).abs() < 1e-9);
-        assert!((s.median_turn_failed_deg - 0.2f64.to_degrees()).abs() < 1e-9);
-        assert_eq!(LiftStats::of(&[]), LiftStats::default());
+        assert!((s.median_turn_held_deg.unwrap() - 0.3f64.to_degrees()).abs() < 1e-9);
+        assert!((s.median_turn_failed_deg.unwrap() - 0.2f64.to_degrees()).abs() < 1e-9);
+        assert_eq!(
+            LiftStats::of(&[]),
+            LiftStats {
+                median_turn_held_deg: Some(0.0),
+                median_turn_failed_deg: Some(0.0),
+                ..LiftStats::default()
+            }
+        );
         // A physics failure is neither kind of failed lift.
         let broken = EpisodeSummary {
             physics_failure: true,
