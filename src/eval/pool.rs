@@ -200,11 +200,7 @@ fn pool_object(parts: &[&ObjectResult]) -> ObjectResult {
         successes,
         rate: successes as f64 / trials.max(1) as f64,
         ci95: wilson(successes, trials),
-        mean_steps: parts
-            .iter()
-            .map(|o| o.mean_steps * o.trials as f64)
-            .sum::<f64>()
-            / trials.max(1) as f64,
+        mean_steps: mean_steps(parts.iter().copied()),
         physics_failures: parts.iter().map(|o| o.physics_failures).sum(),
         outcomes: parts
             .iter()
@@ -219,6 +215,11 @@ fn pool_object(parts: &[&ObjectResult]) -> ObjectResult {
         lift_heights: joined(parts, |o| &o.lift_heights),
         lift_turns: joined(parts, |o| &o.lift_turns),
     }
+}
+
+/// The mean control steps per episode over `objects`' trials.
+fn mean_steps<'a>(objects: impl Iterator<Item = &'a ObjectResult>) -> f64 {
+    weighted(objects.map(|o| (o.mean_steps, o.trials)))
 }
 
 /// A mean over the files, each weighted by its count (0 with no count at all).
@@ -338,11 +339,7 @@ fn pool_agent(name: &str, list: &[(&Path, &AgentResult)]) -> AgentResult {
         agent: name.to_string(),
         mean_rate: objects.iter().map(|o| o.rate).sum::<f64>() / objects.len().max(1) as f64,
         ci95: wilson(k_all, n_all),
-        mean_steps: objects
-            .iter()
-            .map(|o| o.mean_steps * o.trials as f64)
-            .sum::<f64>()
-            / n_all.max(1) as f64,
+        mean_steps: mean_steps(objects.iter()),
         control_steps_per_s: list
             .iter()
             .map(|(_, r)| r.control_steps_per_s * r.wall_s)
