@@ -53,8 +53,9 @@ pub struct RunArgs {
     /// The robot: sim or ros.
     #[arg(long, value_enum, default_value = "sim")]
     pub backend: Backend,
-    /// Checkpoint folder of the policy.
-    #[arg(long, default_value = "assets/policies/quick_gru_m3_pca5")]
+    /// Checkpoint folder of the policy (default: the shipped policy that lifted the most
+    /// validation objects from the pre-grasp, the placement `grasp run` plans).
+    #[arg(long, default_value = "assets/policies/grip_long_gru_m3_pca5")]
     pub policy: PathBuf,
     /// Two-finger grasp file (TOML or JSON).
     #[arg(long, conflicts_with_all = ["cloud", "center"])]
