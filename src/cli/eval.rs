@@ -344,10 +344,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
         .collect()
 }
 
-/// Most trials per object `eval --trials` runs (each is a simulated episode per agent).
-const MAX_TRIALS: usize = 10_000;
-
-pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
+pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
     // Every output is checked before the first episode, so that no evaluation is thrown
     // away by a write bound to fail.
     if let Some(p) = &a.plot {
@@ -356,6 +353,10 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     if let Some(p) = &a.csv {
         check_writable_file(p)
             .map_err(|e| anyhow::anyhow!("--csv {}: {}", p.display(), e.source))?;
+    }
+    // `--labels "A, B"` names B, not " B".
+    for l in &mut a.labels {
+        *l = l.trim().to_string();
     }
     check_labels(&a)?;
     let (mut results, title) = match &a.from_json {
@@ -414,6 +415,14 @@ fn check_labels(a: &EvalArgs) -> Result<()> {
         if a.labels[..i].contains(l) {
             bail!("--labels: '{l}' is given twice; each agent needs its own name");
         }
+        // A line break would split the agent's row of --csv and --markdown.
+        if l.chars().any(char::is_control) {
+            bail!(
+                "--labels: label {} ({l:?}) holds a control character (a line break or \
+                 tab); give each agent a one-line name",
+                i + 1
+            );
+        }
     }
     if a.from_json.is_none() && !a.labels.is_empty() && a.labels.len() != a.policy.len() {
         bail!(
@@ -429,38 +438,17 @@ fn check_labels(a: &EvalArgs) -> Result<()> {
 /// The agents of an earlier `grasp eval --json` in `file`: those named by --policy, in
 /// that order, or all.
 fn saved(a: &EvalArgs, file: &std::path::Path) -> Result<Vec<AgentResult>> {
-    let all = read_results(file)?;
-    if a.policy.is_empty() {
-        return Ok(all);
-    }
-    a.policy
-        .iter()
-        .map(|p| {
-            let name = match p.as_str() {
-                "baseline1" => AgentSpec::Baseline1.label(),
-                "baseline2" => AgentSpec::Baseline2.label(),
-                other => other.to_string(),
-            };
-            all.iter()
-                .find(|r| r.agent == name)
-                .cloned()
-                .with_context(|| {
-                    format!(
-                        "{} holds no agent '{name}'; it holds: {}",
-                        file.display(),
-                        all.iter()
-                            .map(|r| r.agent.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                })
-        })
-        .collect()
+    Ok(grasp::eval::select_agents(
+        file,
+        read_results(file)?,
+        &a.policy,
+    )?)
 }
 
 /// Runs the evaluation the flags describe.
 /// Checks the flags that need no file: `--trials`, `--difficulty`, the recording flags.
 fn check_flags(a: &EvalArgs) -> Result<()> {
+    use grasp::eval::MAX_TRIALS;
     if a.trials == 0 || a.trials > MAX_TRIALS {
         bail!(
             "--trials {} must be in 1..={MAX_TRIALS} (trials per object, each a simulated \
