@@ -183,3 +183,39 @@ fn labels_are_trimmed_and_one_line() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert!(text.contains("\nB,box_sugar,2,"), "{text}");
 }
+
+/// A checkpoint whose `config.toml` was edited to `max_steps = 1000000` was evaluated: a
+/// policy that never lifts (a young one, whose lift probability stays below 0.5) held
+/// `grasp eval` of one trial for hours.
+#[test]
+fn an_edited_checkpoint_with_endless_episodes_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let ck = dir.path().join("ck");
+    std::fs::create_dir(&ck).unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/policies/quick_gru_m3_pca5");
+    for f in std::fs::read_dir(&src).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, ck.join(f.file_name().unwrap())).unwrap();
+    }
+    let cfg = ck.join("config.toml");
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    assert!(text.contains("max_steps = 20\n"));
+    std::fs::write(
+        &cfg,
+        text.replace("max_steps = 20\n", "max_steps = 1000000\n"),
+    )
+    .unwrap();
+    let o = grasp(&[
+        "eval",
+        "--policy",
+        s(&ck),
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "1",
+    ]);
+    assert_fails(
+        &o,
+        &["config.toml", "max_steps: 1000000 must be in 1..=1000"],
+    );
+}
