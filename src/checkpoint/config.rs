@@ -282,14 +282,27 @@ fn load_chain(
         });
     }
     let dir = path.parent().unwrap_or(Path::new("."));
-    let base_path = dir.join(base);
-    if let Err(e) = std::fs::metadata(&base_path) {
-        // Name the file that refers to the missing one, not only the missing one.
-        return Err(TrainConfigError::Value {
-            path: path.to_path_buf(),
-            field: "base".into(),
-            message: format!("cannot read {}: {e}", base_path.display()),
-        });
+    let base_path = dir.join(&base);
+    // Name the file that refers to the missing one, not only the missing one.
+    let refer = |message: String| TrainConfigError::Value {
+        path: path.to_path_buf(),
+        field: "base".into(),
+        message,
+    };
+    if base.trim().is_empty() {
+        return Err(refer(
+            "is empty: name the config file to inherit from".into(),
+        ));
+    }
+    match std::fs::metadata(&base_path) {
+        Err(e) => return Err(refer(format!("cannot read {}: {e}", base_path.display()))),
+        Ok(m) if m.is_dir() => {
+            return Err(refer(format!(
+                "{} is a folder, not a config file",
+                base_path.display()
+            )))
+        }
+        Ok(_) => {}
     }
     let mut merged = load_chain(&base_path, depth + 1, seen)?;
     merge_tables(&mut merged, table);
@@ -316,7 +329,9 @@ impl TrainConfig {
             return Err(TrainConfigError::Value {
                 path: path.to_path_buf(),
                 field: "base".into(),
-                message: "inheritance needs a file: use TrainConfig::load".into(),
+                message: "is not followed here: this config is read on its own (a \
+                          checkpoint's config.toml is saved complete, without `base`)"
+                    .into(),
             });
         }
         let stem = path
@@ -675,6 +690,33 @@ mod tests {
         let e = TrainConfig::load(&m).unwrap_err().to_string();
         assert!(
             e.contains("m.toml: `base`") && e.contains("missing.toml"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_base_that_is_no_file_names_the_file_that_refers_to_it() {
+        // A folder was named only by itself ("cannot read config DIR: Is a directory"),
+        // an empty `base` as "cannot read : No such file"; a `base` in a checkpoint's
+        // config.toml pointed at an API ("use TrainConfig::load").
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let d = write(dir.path(), "d.toml", "base = \"sub\"\n");
+        let e = TrainConfig::load(&d).unwrap_err().to_string();
+        assert!(
+            e.contains("d.toml: `base`") && e.contains("sub is a folder, not a config file"),
+            "{e}"
+        );
+        let empty = write(dir.path(), "e.toml", "base = \"\"\n");
+        let e = TrainConfig::load(&empty).unwrap_err().to_string();
+        assert!(e.contains("e.toml: `base`: is empty"), "{e}");
+        let e = TrainConfig::parse(Path::new("ck/config.toml"), "base = \"b.toml\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("ck/config.toml: `base`")
+                && e.contains("saved complete")
+                && !e.contains("TrainConfig"),
             "{e}"
         );
     }

@@ -349,10 +349,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
         .collect()
 }
 
-/// Most trials per object `eval --trials` runs (each is a simulated episode per agent).
-const MAX_TRIALS: usize = 10_000;
-
-pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
+pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
     // Every output is checked before the first episode, so that no evaluation is thrown
     // away by a write bound to fail.
     if let Some(p) = &a.plot {
@@ -361,6 +358,10 @@ pub fn run(a: EvalArgs, g: &Global) -> Result<()> {
     if let Some(p) = &a.csv {
         check_writable_file(p)
             .map_err(|e| anyhow::anyhow!("--csv {}: {}", p.display(), e.source))?;
+    }
+    // `--labels "A, B"` names B, not " B".
+    for l in &mut a.labels {
+        *l = l.trim().to_string();
     }
     check_labels(&a)?;
     let (mut results, title) = match a.from_json.as_slice() {
@@ -426,6 +427,14 @@ fn check_labels(a: &EvalArgs) -> Result<()> {
         if a.labels[..i].contains(l) {
             bail!("--labels: '{l}' is given twice; each agent needs its own name");
         }
+        // A line break would split the agent's row of --csv and --markdown.
+        if l.chars().any(char::is_control) {
+            bail!(
+                "--labels: label {} ({l:?}) holds a control character (a line break or \
+                 tab); give each agent a one-line name",
+                i + 1
+            );
+        }
     }
     if a.from_json.is_empty() && !a.labels.is_empty() && a.labels.len() != a.policy.len() {
         bail!(
@@ -441,6 +450,13 @@ fn check_labels(a: &EvalArgs) -> Result<()> {
 /// The agents of earlier `grasp eval --json` evaluations in `files` (pooled when several:
 /// [`grasp::eval::pool`]): those named by --policy, in that order, or all.
 fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
+    if let [file] = files {
+        return Ok(grasp::eval::select_agents(
+            file,
+            read_results(file)?,
+            &a.policy,
+        )?);
+    }
     let wanted: Vec<String> = a
         .policy
         .iter()
@@ -468,10 +484,6 @@ fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
     if wanted.is_empty() {
         return Ok(all);
     }
-    let source = match files {
-        [f] => f.display().to_string(),
-        _ => "the files".to_string(),
-    };
     wanted
         .iter()
         .map(|name| {
@@ -480,13 +492,7 @@ fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
                 .cloned()
                 .with_context(|| {
                     format!(
-                        "{source} {} no agent '{name}'; {}: {}",
-                        if files.len() == 1 { "holds" } else { "hold" },
-                        if files.len() == 1 {
-                            "it holds"
-                        } else {
-                            "they hold"
-                        },
+                        "the files hold no agent '{name}'; they hold: {}",
                         held.join(", ")
                     )
                 })
@@ -497,6 +503,7 @@ fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
 /// Runs the evaluation the flags describe.
 /// Checks the flags that need no file: `--trials`, `--difficulty`, the recording flags.
 fn check_flags(a: &EvalArgs) -> Result<()> {
+    use grasp::eval::MAX_TRIALS;
     if a.trials == 0 || a.trials > MAX_TRIALS {
         bail!(
             "--trials {} must be in 1..={MAX_TRIALS} (trials per object, each a simulated \

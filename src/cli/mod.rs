@@ -247,11 +247,9 @@ pub fn check_difficulty(d: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Most attempts `--attempts` accepts (`grasp eval`, `grasp run`).
-pub const MAX_ATTEMPTS: usize = 10;
-
-/// Checks an `--attempts` flag: 1..=[`MAX_ATTEMPTS`]; `what` says what one attempt is.
+/// Checks an `--attempts` flag: 1..=[`grasp::eval::MAX_ATTEMPTS`]; `what` says what one attempt is.
 pub fn check_attempts(n: usize, what: &str) -> anyhow::Result<()> {
+    use grasp::eval::MAX_ATTEMPTS;
     if n == 0 || n > MAX_ATTEMPTS {
         anyhow::bail!("--attempts {n} must be in 1..={MAX_ATTEMPTS} ({what})");
     }

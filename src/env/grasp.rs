@@ -46,7 +46,7 @@ use std::time::Instant;
 mod config;
 mod probe;
 mod retry;
-pub use config::{AtMaxSteps, EnvConfig, GraspEnvError};
+pub use config::{AtMaxSteps, EnvConfig, GraspEnvError, MAX_STEPS};
 pub use retry::NoRetry;
 use retry::RetryStart;
 

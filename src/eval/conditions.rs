@@ -72,7 +72,38 @@ impl EvalConditions {
             message,
         };
         self.placement.validate().map_err(bad)?;
-        self.randomization.validate().map_err(bad)
+        self.randomization.validate().map_err(bad)?;
+        // A conditions file is read to perturb: ranges set under `enabled = false` (the
+        // default) would leave every trial unperturbed while the results record them.
+        let set = self.randomization_set();
+        if !self.randomization.enabled && !set.is_empty() {
+            return Err(bad((
+                "randomization.enabled",
+                format!(
+                    "is false: the {} set here would randomise nothing (set `enabled = \
+                     true`, or remove them)",
+                    set.join(", ")
+                ),
+            )));
+        }
+        Ok(())
+    }
+
+    /// The `[randomization]` values that differ from the defaults (`enabled` aside).
+    fn randomization_set(&self) -> Vec<&'static str> {
+        let (r, d) = (&self.randomization, Randomization::default());
+        [
+            ("mass_scale", r.mass_scale != d.mass_scale),
+            ("max_mass_kg", r.max_mass_kg != d.max_mass_kg),
+            ("friction", r.friction != d.friction),
+            ("size_scale", r.size_scale != d.size_scale),
+            ("yaw", r.yaw != d.yaw),
+            ("effort_noise", r.effort_noise != d.effort_noise),
+            ("joint_noise", r.joint_noise != d.joint_noise),
+        ]
+        .into_iter()
+        .filter_map(|(name, differs)| differs.then_some(name))
+        .collect()
     }
 
     /// Whether the conditions change anything (the default file changes nothing).
@@ -143,5 +174,31 @@ mod tests {
         let p = write("nan.toml", "[placement]\nyaw = nan\n");
         let e = EvalConditions::load(&p).unwrap_err().to_string();
         assert!(e.contains("placement.yaw"), "{e}");
+    }
+
+    #[test]
+    fn ranges_without_enabled_are_refused_not_ignored() {
+        // Without `enabled = true` these ranges perturbed nothing, and the results
+        // recorded them as the evaluation's conditions.
+        let p = write(
+            "off.toml",
+            "[randomization]\nfriction = [0.1, 0.2]\nmass_scale = [5.0, 10.0]\n",
+        );
+        let e = EvalConditions::load(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("off.toml")
+                && e.contains("randomization.enabled")
+                && e.contains("mass_scale, friction")
+                && e.contains("enabled = true"),
+            "{e}"
+        );
+        // Off with the defaults (or nothing) is fine, and so is on with any ranges.
+        let p = write("off_ok.toml", "[randomization]\nenabled = false\n");
+        assert!(EvalConditions::load(&p).unwrap().is_default());
+        let p = write(
+            "on.toml",
+            "[randomization]\nenabled = true\nfriction = [0.1, 0.2]\n",
+        );
+        assert!(EvalConditions::load(&p).is_ok());
     }
 }

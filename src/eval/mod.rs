@@ -32,8 +32,8 @@ mod tables;
 pub use agent::{policy_step, AgentSpec, PolicyAgent};
 pub use paired::{paired, paired_lines, paired_with_first, unpaired_lines, Paired};
 pub use results::{
-    over_1cm_by_body, physics_line, read_results, AgentResult, ContactStats, LiftStats,
-    ObjectResult, PregraspStats, RankStats, TrialFailure,
+    over_1cm_by_body, physics_line, read_results, select_agents, AgentResult, ContactStats,
+    LiftStats, ObjectResult, PregraspStats, RankStats, TrialFailure,
 };
 pub use tables::{csv_table, markdown_table};
 
@@ -45,6 +45,13 @@ use results::failure_counts;
 use std::path::PathBuf;
 use trial::{run_trial, Actor, TrialOutcome};
 pub use trial::{RetryStats, TrialPlan};
+
+/// Most trials per object an evaluation runs (`grasp eval --trials`, a grid's `[eval]
+/// trials`): each is a simulated episode per agent.
+pub const MAX_TRIALS: usize = 10_000;
+
+/// Most attempts per trial (`grasp eval --attempts`, `grasp run --attempts`).
+pub const MAX_ATTEMPTS: usize = 10;
 
 /// Wilson score interval for `k` successes in `n` trials at 95 % (z = 1.96): (low, high).
 /// `n = 0` gives (0, 1).

@@ -42,8 +42,18 @@ pub fn pool(files: &[(PathBuf, Vec<AgentResult>)]) -> Result<Vec<AgentResult>, E
         return Ok(agents.clone());
     }
     let mut names: Vec<&str> = Vec::new();
-    for (_, agents) in files {
-        for a in agents {
+    for (path, agents) in files {
+        for (k, a) in agents.iter().enumerate() {
+            if agents[..k].iter().any(|b| b.agent == a.agent) {
+                return Err(error(
+                    path,
+                    format!(
+                        "holds two agents named '{}': their trials cannot be told apart \
+                         when pooled",
+                        a.agent
+                    ),
+                ));
+            }
             if !names.contains(&a.agent.as_str()) {
                 names.push(&a.agent);
             }
@@ -526,6 +536,15 @@ mod tests {
         let m = msg(&fewer);
         assert!(
             m.contains("seed1.json") && m.contains("same objects"),
+            "{m}"
+        );
+        // Two agents of one name in a file.
+        let mut named_twice = files.clone();
+        let copy = named_twice[1].1[0].clone();
+        named_twice[1].1.push(copy);
+        let m = msg(&named_twice);
+        assert!(
+            m.contains("seed1.json") && m.contains("two agents named 'pca8'"),
             "{m}"
         );
         // No seed recorded.

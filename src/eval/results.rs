@@ -405,6 +405,16 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         if r.objects.is_empty() {
             return Err(bad(format!("agent '{}': no objects", r.agent)));
         }
+        // An evaluation runs each object once (`--objects` refuses a name given twice):
+        // a repeated object would be counted twice in the agent's mean and trials.
+        for (k, o) in r.objects.iter().enumerate() {
+            if r.objects[..k].iter().any(|p| p.object == o.object) {
+                return Err(bad(format!(
+                    "agent '{}': object '{}' is listed twice",
+                    r.agent, o.object
+                )));
+            }
+        }
         for o in &mut r.objects {
             let k = o.outcomes.iter().filter(|&&s| s).count();
             if o.outcomes.len() != o.trials || k != o.successes {
@@ -421,6 +431,7 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
             o.rate = k as f64 / o.trials.max(1) as f64;
             o.ci95 = wilson(k, o.trials);
         }
+        check_retries(r).map_err(bad)?;
         let k_all: usize = r.objects.iter().map(|o| o.successes).sum();
         let n_all: usize = r.objects.iter().map(|o| o.trials).sum();
         r.mean_rate = r.objects.iter().map(|o| o.rate).sum::<f64>() / r.objects.len().max(1) as f64;
@@ -446,6 +457,94 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         }
     }
     Ok(results)
+}
+
+/// Checks `r`'s attempts per trial against its `retries` and recomputes the counts of
+/// trials won at the first attempt, retried and won on a retry from them, as
+/// [`RetryStats::of`] counts them (the reasons a trial was not retried are kept: the
+/// file is their only record).
+fn check_retries(r: &mut AgentResult) -> Result<(), String> {
+    let Some(s) = r.retries.as_mut() else {
+        return match r.objects.iter().find(|o| !o.attempts.is_empty()) {
+            Some(o) => Err(format!(
+                "agent '{}', object '{}': attempts per trial without the agent's `retries`",
+                r.agent, o.object
+            )),
+            None => Ok(()),
+        };
+    };
+    if !(1..=super::MAX_ATTEMPTS).contains(&s.attempts) {
+        return Err(format!(
+            "agent '{}': `retries.attempts` {} must be in 1..={} (attempts per trial)",
+            r.agent,
+            s.attempts,
+            super::MAX_ATTEMPTS
+        ));
+    }
+    let (mut first, mut retried, mut won_on_retry) = (0, 0, 0);
+    for o in &r.objects {
+        let in_range = o.attempts.iter().all(|n| (1..=s.attempts).contains(n));
+        if o.attempts.len() != o.trials || !in_range {
+            return Err(format!(
+                "agent '{}', object '{}': the attempts per trial must be {} numbers in \
+                 1..={} (`retries.attempts`), one per trial",
+                r.agent, o.object, o.trials, s.attempts
+            ));
+        }
+        for (&won, &n) in o.outcomes.iter().zip(&o.attempts) {
+            first += usize::from(won && n == 1);
+            retried += usize::from(n > 1);
+            won_on_retry += usize::from(won && n > 1);
+        }
+    }
+    s.first_attempt_successes = first;
+    s.retried = retried;
+    s.won_on_retry = won_on_retry;
+    Ok(())
+}
+
+/// The agents of `results` (read from `path`) that `names` pick, in that order; all of
+/// them when `names` is empty. `baseline1` and `baseline2` name the baselines. A name
+/// that several agents of the file share is refused: it would pick one of them silently.
+pub fn select_agents(
+    path: &Path,
+    results: Vec<AgentResult>,
+    names: &[String],
+) -> Result<Vec<AgentResult>, EvalError> {
+    if names.is_empty() {
+        return Ok(results);
+    }
+    let bad = |message: String| EvalError::Results {
+        path: path.to_path_buf(),
+        message,
+    };
+    names
+        .iter()
+        .map(|p| {
+            let name = match p.as_str() {
+                "baseline1" => super::AgentSpec::Baseline1.label(),
+                "baseline2" => super::AgentSpec::Baseline2.label(),
+                other => other.to_string(),
+            };
+            let found: Vec<&AgentResult> = results.iter().filter(|r| r.agent == name).collect();
+            match found.as_slice() {
+                [one] => Ok((*one).clone()),
+                [] => Err(bad(format!(
+                    "holds no agent '{name}'; it holds: {}",
+                    results
+                        .iter()
+                        .map(|r| r.agent.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))),
+                many => Err(bad(format!(
+                    "holds {} agents named '{name}': --policy cannot tell them apart (show \
+                     all agents without --policy, or evaluate them with --labels)",
+                    many.len()
+                ))),
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -607,5 +706,105 @@ mod tests {
         assert!(e.contains("lists other objects"), "{e}");
         write(&[]);
         assert!(read_results(&path).is_err());
+    }
+
+    /// One agent named `agent` on `objects`, each with `outcomes` and `attempts`.
+    fn saved(agent: &str, objects: &[&str], outcomes: &[bool], attempts: &[usize]) -> AgentResult {
+        let k = outcomes.iter().filter(|&&s| s).count();
+        AgentResult {
+            agent: agent.into(),
+            objects: objects
+                .iter()
+                .map(|o| ObjectResult {
+                    object: o.to_string(),
+                    trials: outcomes.len(),
+                    successes: k,
+                    outcomes: outcomes.to_vec(),
+                    attempts: attempts.to_vec(),
+                    ..ObjectResult::default()
+                })
+                .collect(),
+            retries: (!attempts.is_empty()).then(|| RetryStats {
+                attempts: 2,
+                ..RetryStats::default()
+            }),
+            ..AgentResult::default()
+        }
+    }
+
+    #[test]
+    fn saved_results_that_would_mislead_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("eval.json");
+        let write = |rs: &[AgentResult]| {
+            std::fs::write(&path, serde_json::to_string_pretty(rs).unwrap()).unwrap();
+        };
+        // An object twice in one agent was pooled into its mean as two objects.
+        write(&[saved("A", &["wedge", "wedge"], &[true, false], &[])]);
+        let e = read_results(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("agent 'A': object 'wedge' is listed twice"),
+            "{e}"
+        );
+        // The retry counts are recomputed from the trials' attempts: an edited count
+        // printed "99 of 2 trials won at the first (4950.0 %)".
+        let mut r = saved("A", &["wedge"], &[true, true, false], &[1, 2, 2]);
+        r.retries.as_mut().unwrap().first_attempt_successes = 99;
+        write(&[r]);
+        let back = read_results(&path).unwrap();
+        let s = back[0].retries.as_ref().unwrap();
+        assert_eq!(
+            (s.first_attempt_successes, s.retried, s.won_on_retry),
+            (1, 2, 1)
+        );
+        for (attempts, allowed, want) in [
+            (vec![1, 3, 1], 2, "3 numbers in 1..=2"),
+            (vec![1, 1], 2, "3 numbers in 1..=2"),
+            (vec![0, 1, 1], 2, "3 numbers in 1..=2"),
+            (vec![1, 1, 1], 0, "`retries.attempts` 0 must be in 1..=10"),
+        ] {
+            let mut r = saved("A", &["wedge"], &[true, true, false], &attempts);
+            r.retries.as_mut().unwrap().attempts = allowed;
+            write(&[r]);
+            let e = read_results(&path).unwrap_err().to_string();
+            assert!(
+                e.contains("eval.json") && e.contains(want),
+                "{attempts:?}: {e}"
+            );
+        }
+        let mut r = saved("A", &["wedge"], &[true], &[1]);
+        r.retries = None;
+        write(&[r]);
+        let e = read_results(&path).unwrap_err().to_string();
+        assert!(e.contains("without the agent's `retries`"), "{e}");
+    }
+
+    #[test]
+    fn an_agent_name_the_file_holds_twice_is_not_picked_silently() {
+        let path = Path::new("eval.json");
+        let two = || {
+            vec![
+                saved("Baseline 2", &["wedge"], &[true], &[]),
+                saved("Baseline 2", &["wedge"], &[false], &[]),
+                saved("B1", &["wedge"], &[false], &[]),
+            ]
+        };
+        let e = select_agents(path, two(), &["baseline2".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("eval.json") && e.contains("holds 2 agents named 'Baseline 2'"),
+            "{e}"
+        );
+        let picked = select_agents(path, two(), &["B1".into()]).unwrap();
+        assert_eq!(picked.len(), 1);
+        assert_eq!(select_agents(path, two(), &[]).unwrap().len(), 3);
+        let e = select_agents(path, two(), &["baseline1".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("holds no agent 'Baseline 1'; it holds: Baseline 2, Baseline 2, B1"),
+            "{e}"
+        );
     }
 }

@@ -3,6 +3,18 @@
 
 use super::AgentResult;
 
+/// `name` as one Markdown table cell: a `|` would open another column, a line break
+/// another row (agent names come from `--labels` and saved JSON, objects from file names).
+fn md_cell(name: &str) -> String {
+    name.replace('|', "\\|").replace(char::is_control, " ")
+}
+
+/// `name` as one CSV field: commas become `;` and line breaks spaces, so that each
+/// (agent, object) stays one row of the same columns.
+fn csv_field(name: &str) -> String {
+    name.replace(',', ";").replace(char::is_control, " ")
+}
+
 /// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
 /// the mean. Rates in percent. When any episode ended in a physics failure, a last column
 /// counts them per agent.
@@ -12,7 +24,7 @@ pub fn markdown_table(results: &[AgentResult]) -> String {
     };
     let mut s = String::from("| agent |");
     for o in &first.objects {
-        s.push_str(&format!(" {} |", o.object));
+        s.push_str(&format!(" {} |", md_cell(&o.object)));
     }
     let failures = results.iter().any(|r| r.physics_failures > 0);
     s.push_str(" mean | 95 % CI | steps |");
@@ -29,7 +41,7 @@ pub fn markdown_table(results: &[AgentResult]) -> String {
         "---|---|---|\n"
     });
     for r in results {
-        s.push_str(&format!("| {} |", r.agent));
+        s.push_str(&format!("| {} |", md_cell(&r.agent)));
         for o in &r.objects {
             s.push_str(&format!(" {:.0} |", 100.0 * o.rate));
         }
@@ -57,8 +69,8 @@ pub fn csv_table(results: &[AgentResult]) -> String {
         for o in &r.objects {
             s.push_str(&format!(
                 "{},{},{},{},{:.4},{:.4},{:.4},{:.3},{}\n",
-                r.agent.replace(',', ";"),
-                o.object,
+                csv_field(&r.agent),
+                csv_field(&o.object),
                 o.trials,
                 o.successes,
                 o.rate,
@@ -114,5 +126,27 @@ mod tests {
         let csv = csv_table(&[r]);
         assert_eq!(csv.lines().count(), 2);
         assert!(csv.contains("Baseline 1,box,10,8,0.8000"));
+    }
+
+    #[test]
+    fn names_keep_to_their_cell() {
+        // A line break in an agent's name (a saved JSON's) split its CSV and Markdown
+        // rows; a comma in an object's (a mesh file "a,b.obj") shifted the CSV columns.
+        let r = AgentResult {
+            agent: "A\nB|C".into(),
+            objects: vec![ObjectResult {
+                object: "a,b".into(),
+                trials: 1,
+                outcomes: vec![false],
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        let csv = csv_table(std::slice::from_ref(&r));
+        assert_eq!(csv.lines().count(), 2, "{csv}");
+        assert!(csv.contains("\nA B|C,a;b,1,0,"), "{csv}");
+        let md = markdown_table(&[r]);
+        assert_eq!(md.lines().count(), 3, "{md}");
+        assert!(md.contains("| a,b |") && md.contains("| A B\\|C |"), "{md}");
     }
 }

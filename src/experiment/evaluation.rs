@@ -102,6 +102,23 @@ impl EvalSettings {
         if let Some(s) = self.objects.iter().find(|s| s.trim().is_empty()) {
             return Err(("eval.objects", format!("'{s}' is not an object set")));
         }
+        if let Some(s) = (1..self.objects.len()).find_map(|i| {
+            self.objects[..i]
+                .contains(&self.objects[i])
+                .then(|| &self.objects[i])
+        }) {
+            return Err(("eval.objects", format!("'{s}' is listed twice")));
+        }
+        if self.trials > crate::eval::MAX_TRIALS {
+            return Err((
+                "eval.trials",
+                format!(
+                    "{} must be in 0..={} (trials per object and run; 0: no evaluation)",
+                    self.trials,
+                    crate::eval::MAX_TRIALS
+                ),
+            ));
+        }
         Ok(())
     }
 

@@ -321,6 +321,17 @@ impl GridConfig {
                     "list at least one config".into(),
                 );
             }
+            if let Some(c) = a
+                .configs
+                .iter()
+                .enumerate()
+                .find_map(|(i, c)| a.configs[..i].contains(c).then_some(c))
+            {
+                return bad(
+                    &format!("ablation[{k}].configs"),
+                    format!("{} is listed twice", c.display()),
+                );
+            }
             if let Some(r) = a.reference.as_ref().filter(|r| !a.configs.contains(r)) {
                 return bad(
                     &format!("ablation[{k}].reference"),
@@ -793,6 +804,33 @@ mod tests {
         );
         let e = plan(&p, Path::new("o")).unwrap_err().to_string();
         assert!(e.contains("ablation[0].reference"), "{e}");
+        // A config twice in one ablation compared a variant with itself; a grid's trials
+        // are bounded as `grasp eval --trials` is (10^8 ran for hours); a set evaluated
+        // twice was shown twice.
+        let p = write_grid(
+            dir.path(),
+            "name = \"g\"\nseeds = [1]\n[[ablation]]\nname = \"a\"\nconfigs = \
+             [\"gru_m3_pca5.toml\", \"gru_m3_pca5.toml\"]\n",
+        );
+        let e = plan(&p, Path::new("o")).unwrap_err().to_string();
+        assert!(
+            e.contains("ablation[0].configs") && e.contains("gru_m3_pca5.toml is listed twice"),
+            "{e}"
+        );
+        for (eval, want) in [
+            (
+                "[eval]\nobjects = \"unseen\"\ntrials = 100000000",
+                "eval.trials`: 100000000 must be in 0..=10000",
+            ),
+            (
+                "[eval]\nobjects = [\"unseen\", \"unseen\"]\ntrials = 1",
+                "eval.objects`: 'unseen' is listed twice",
+            ),
+        ] {
+            let p = write_grid(dir.path(), &grid_text(eval));
+            let e = plan(&p, Path::new("o")).unwrap_err().to_string();
+            assert!(e.contains(want), "{eval}: {e}");
+        }
         let p = write_grid(dir.path(), "name = \"g\"\nseeds = [1, 1]\nablation = []\n");
         assert!(plan(&p, Path::new("o"))
             .unwrap_err()

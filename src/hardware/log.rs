@@ -113,6 +113,9 @@ pub struct AttemptLog {
     file: File,
     lines: u64,
     created: bool,
+    /// Whether `file` is a regular file: only those are synced (`fsync` on `/dev/null`
+    /// or a pipe fails with EINVAL after the attempt has run).
+    regular: bool,
 }
 
 impl AttemptLog {
@@ -144,11 +147,13 @@ impl AttemptLog {
             }
             Err(e) => return Err(io(e)),
         };
+        let regular = file.metadata().map_err(io)?.is_file();
         Ok(AttemptLog {
             path: path.to_path_buf(),
             file,
             lines: 0,
             created,
+            regular,
         })
     }
 
@@ -196,8 +201,12 @@ impl AttemptLog {
         self.sync()
     }
 
-    /// Forces the written data to disk.
+    /// Forces the written data to disk; nothing to do where the log is not a regular
+    /// file (`/dev/null`, a pipe: each line was written whole when it was appended).
     pub fn sync(&mut self) -> Result<(), LogError> {
+        if !self.regular {
+            return Ok(());
+        }
         self.file.sync_data().map_err(|source| LogError::Io {
             path: self.path.clone(),
             source,
@@ -349,6 +358,24 @@ mod tests {
             drop(log);
             assert_eq!(read_log(&target).unwrap().len(), 1);
         }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_log_that_is_not_a_regular_file_takes_the_outcome() {
+        // `--log /dev/null`: syncing it failed with EINVAL after the attempt had run, and
+        // its result was lost.
+        let mut log = AttemptLog::open(Path::new("/dev/null")).unwrap();
+        log.step(step(0)).unwrap();
+        let out = OutcomeRecord {
+            time_s: 0.1,
+            steps: 1,
+            success: true,
+            reason: "lifted".into(),
+        };
+        log.outcome(out).unwrap();
+        drop(log);
+        assert!(Path::new("/dev/null").exists());
     }
 
     #[test]

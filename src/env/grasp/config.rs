@@ -28,6 +28,9 @@ pub enum AtMaxSteps {
     Lift,
 }
 
+/// Most stage-2 control steps an episode may have (`[env] max_steps`; the paper's is 20).
+pub const MAX_STEPS: usize = 1000;
+
 /// Settings of the grasping MDP.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -165,6 +168,18 @@ impl EnvConfig {
         if self.max_steps == 0 {
             return bad("max_steps", "must be at least 1".into());
         }
+        // A policy that never lifts runs every step: 10^6 held `grasp eval` of one trial
+        // for hours (a control step is about 1/35 s of computation).
+        if self.max_steps > MAX_STEPS {
+            return bad(
+                "max_steps",
+                format!(
+                    "{} must be in 1..={MAX_STEPS} (stage-2 control steps per episode; a \
+                     policy that never lifts runs them all)",
+                    self.max_steps
+                ),
+            );
+        }
         within("grasp_depth", self.grasp_depth, 0.0, 0.2, " m")?;
         within_above("closing_time", self.closing_time, 0.0, 10.0, " s")?;
         // At least 1 ms: a tiny period passes `> 0` but never finishes stage 1.
@@ -224,5 +239,24 @@ impl EnvConfig {
                 format!("unknown posture '{other}': expected open or c-shape"),
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn episode_length_is_bounded() {
+        let mut c = EnvConfig {
+            max_steps: MAX_STEPS,
+            ..EnvConfig::default()
+        };
+        assert!(c.validate().is_ok());
+        c.max_steps = 1_000_000;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("max_steps: 1000000 must be in 1..=1000"), "{e}");
+        c.max_steps = 0;
+        assert!(c.validate().unwrap_err().to_string().contains("max_steps"));
     }
 }
