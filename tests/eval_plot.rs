@@ -2,31 +2,10 @@
 //! from a live evaluation and again from its saved `--json` output, and its errors.
 
 use std::path::Path;
-use std::process::Output;
 
-fn grasp(args: &[&str]) -> Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_grasp"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env_remove("GRASP_LOG")
-        .output()
-        .expect("run grasp")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Asserts a clean failure (status 1 for our errors, 2 for the argument parser's), every
-/// `needles` in stderr, no panic.
-fn assert_fails(o: &Output, code: i32, needles: &[&str]) {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(code), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for n in needles {
-        assert!(err.contains(n), "missing `{n}` in: {err}");
-    }
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::*;
 
 /// How often `s` is the whole content of a text element of `svg`.
 fn texts(svg: &str, s: &str) -> usize {
@@ -162,36 +141,35 @@ fn plot_errors_are_clear_and_come_before_the_evaluation() {
     };
     let png = format!("{d}/p.png");
     let o = eval(&png);
-    assert_fails(&o, 1, &["p.png", "must end in .svg"]);
+    assert_fails(&o, &["p.png", "must end in .svg"]);
     assert!(!stderr(&o).contains("evaluating"), "{}", stderr(&o));
     // One rule for every output (issue 49): a missing folder is created, a file where a
     // folder goes is refused.
     std::fs::write(dir.path().join("f"), "x").unwrap();
     assert_fails(
         &eval(&format!("{d}/f/p.svg")),
-        1,
         &["p.svg", "is a file, not a folder"],
     );
     std::fs::create_dir(dir.path().join("d.svg")).unwrap();
-    assert_fails(&eval(&format!("{d}/d.svg")), 1, &["d.svg", "is a folder"]);
+    assert_fails(&eval(&format!("{d}/d.svg")), &["d.svg", "is a folder"]);
 
     // Saved results: a missing or foreign file, an unknown agent, a wrong label count.
     let o = grasp(&["eval", "--from-json", "/nonexistent/eval.json"]);
-    assert_fails(&o, 1, &["/nonexistent/eval.json"]);
+    assert_fails(&o, &["/nonexistent/eval.json"]);
     let foreign = dir.path().join("f.json");
     std::fs::write(&foreign, "{\"agent\": 1}").unwrap();
     let o = grasp(&["eval", "--from-json", foreign.to_str().unwrap()]);
-    assert_fails(&o, 1, &["f.json", "not the JSON of `grasp eval --json`"]);
+    assert_fails(&o, &["f.json", "not the JSON of `grasp eval --json`"]);
     let saved = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("docs/results/recipe_2026_12/eval_unseen_20.json");
     let saved = saved.to_str().unwrap();
     let o = grasp(&["eval", "--from-json", saved, "--policy", "nosuch"]);
-    assert_fails(&o, 1, &["no agent 'nosuch'", "Baseline 1"]);
+    assert_fails(&o, &["no agent 'nosuch'", "Baseline 1"]);
     let o = grasp(&["eval", "--from-json", saved, "--labels", "a,b"]);
-    assert_fails(&o, 1, &["--labels names 2 agents, but there are 5"]);
+    assert_fails(&o, &["--labels names 2 agents, but there are 5"]);
     // --from-json replaces the evaluation: its flags are refused.
     let o = grasp(&["eval", "--from-json", saved, "--trials", "3"]);
-    assert_fails(&o, 2, &["--trials"]);
+    assert_fails_with(&o, 2, &["--trials"]);
 }
 
 #[test]
@@ -279,16 +257,15 @@ fn saved_seeds_pool_into_one_evaluation_with_its_paired_test_and_plot() {
     // Seeds that would not pair are refused, naming the file.
     let twice = format!("{d}/unseen_antipodal_seed0.json,{d}/unseen_antipodal_seed0.json");
     let o = grasp(&["eval", "--from-json", &twice]);
-    assert_fails(&o, 1, &["unseen_antipodal_seed0.json", "seed 0 twice"]);
+    assert_fails(&o, &["unseen_antipodal_seed0.json", "seed 0 twice"]);
     let mixed = format!(
         "{d}/unseen_antipodal_seed0.json,docs/results/fig5_2026_12/pca8/unseen_top-down_seed1.json"
     );
     let o = grasp(&["eval", "--from-json", &mixed, "--policy", "pca8"]);
     assert_fails(
         &o,
-        1,
         &["unseen_top-down_seed1.json", "placement top-down here"],
     );
     let o = grasp(&["eval", "--from-json", &files, "--policy", "nobody"]);
-    assert_fails(&o, 1, &["the files hold no agent 'nobody'", "pca8"]);
+    assert_fails(&o, &["the files hold no agent 'nobody'", "pca8"]);
 }

@@ -4,31 +4,9 @@
 
 use std::process::{Command, Output, Stdio};
 
-fn cmd(args: &[&str]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_grasp"));
-    c.args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env_remove("GRASP_LOG");
-    c
-}
-
-fn grasp(args: &[&str]) -> Output {
-    cmd(args).output().expect("run grasp")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Asserts a clean failure: exit status 1, every `needles` in stderr, no panic.
-fn assert_fails(o: &Output, needles: &[&str]) {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for n in needles {
-        assert!(err.contains(n), "missing `{n}` in: {err}");
-    }
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::*;
 
 #[test]
 fn a_closed_stdout_ends_quietly() {

@@ -3,34 +3,11 @@
 //! the build before its fix.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn grasp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_grasp"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env_remove("GRASP_LOG")
-        .output()
-        .expect("run grasp")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Asserts a clean failure: exit status 1, every `needles` in stderr, no panic.
-fn assert_fails(o: &Output, needles: &[&str]) {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for n in needles {
-        assert!(err.contains(n), "missing `{n}` in: {err}");
-    }
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::*;
 
 /// Case 3: a point cloud whose header declares more points than the file can hold is an
 /// error naming the file and line, not an aborted 96 GB allocation (exit 134).

@@ -3,38 +3,10 @@
 //! fails on the build before its fix.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn grasp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_grasp"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env_remove("GRASP_LOG")
-        .output()
-        .expect("run grasp")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-/// Asserts a clean failure: exit status 1, every `needles` in stderr, no panic.
-fn assert_fails(o: &Output, needles: &[&str]) {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for n in needles {
-        assert!(err.contains(n), "missing `{n}` in: {err}");
-    }
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::*;
 
 /// `grasp run --log /dev/null` (no log wanted) ran the attempt, then failed with
 /// "Invalid argument (os error 22)" when syncing the log, and the attempt's result was

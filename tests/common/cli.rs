@@ -1,0 +1,50 @@
+//! Helpers of the command-line tests: run the `grasp` binary from the repository root and
+//! check how it failed. Included with `#[path = "common/cli.rs"] mod cli;` (each test file
+//! uses some of them).
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// The `grasp` binary with `args`, run from the repository root, `GRASP_LOG` unset.
+pub fn cmd(args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_grasp"));
+    c.args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("GRASP_LOG");
+    c
+}
+
+/// Runs `grasp` with `args` and waits for it.
+pub fn grasp(args: &[&str]) -> Output {
+    cmd(args).output().expect("run grasp")
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Asserts a clean failure: exit status 1, every `needles` in stderr, no panic.
+pub fn assert_fails(o: &Output, needles: &[&str]) {
+    assert_fails_with(o, 1, needles);
+}
+
+/// Asserts a clean failure with status `code` (1 for our errors, 2 for the argument
+/// parser's), every `needles` in stderr, no panic.
+pub fn assert_fails_with(o: &Output, code: i32, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "missing `{n}` in: {err}");
+    }
+}
+
+/// A path as the `&str` an argument list takes.
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
