@@ -226,6 +226,27 @@ fn grasp_env_with_primitives_runs_one_update() {
     assert!(latest.join("checkpoint.safetensors").is_file());
     SynergyModel::load(&latest.join("synergy.json")).unwrap();
 
+    // Ranges set without `enabled = true` randomise nothing: training says so.
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    let unused = write(
+        tmp.path(),
+        "g_rand.toml",
+        &format!("{text}[env.randomization]\nfriction = [0.6, 0.9]\n"),
+    );
+    let o = grasp(&[
+        "train",
+        "--config",
+        s(&unused),
+        "--out",
+        s(&tmp.path().join("rr")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("[env.randomization] sets friction but not `enabled = true`"),
+        "{err}"
+    );
+
     // The model is truncated to fewer components; more than it has is an error.
     let text = std::fs::read_to_string(&cfg).unwrap();
     let few = write(tmp.path(), "g3.toml", &format!("n_components = 8\n{text}"));

@@ -92,6 +92,15 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
     }
     cfg.validate(&a.config)
         .context("invalid value given on the command line")?;
+    let unused = cfg.env.grasp.randomization.changed();
+    if !cfg.env.grasp.randomization.enabled && !unused.is_empty() && !g.quiet {
+        eprintln!(
+            "warning: {}: [env.randomization] sets {} but not `enabled = true`: training \
+             randomises nothing",
+            a.config.display(),
+            unused.join(", ")
+        );
+    }
     let dir = a
         .out
         .clone()

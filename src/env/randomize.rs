@@ -58,6 +58,26 @@ impl Default for Randomization {
     }
 }
 
+impl Randomization {
+    /// The ranges set to other than their defaults (`enabled` aside): with `enabled =
+    /// false` they randomise nothing, which a config that sets them likely did not mean.
+    pub fn changed(&self) -> Vec<&'static str> {
+        let d = Randomization::default();
+        [
+            ("mass_scale", self.mass_scale != d.mass_scale),
+            ("max_mass_kg", self.max_mass_kg != d.max_mass_kg),
+            ("friction", self.friction != d.friction),
+            ("size_scale", self.size_scale != d.size_scale),
+            ("yaw", self.yaw != d.yaw),
+            ("effort_noise", self.effort_noise != d.effort_noise),
+            ("joint_noise", self.joint_noise != d.joint_noise),
+        ]
+        .into_iter()
+        .filter_map(|(name, differs)| differs.then_some(name))
+        .collect()
+    }
+}
+
 /// A `[lo, hi]` range: exactly two numbers (serde's fixed-size arrays would drop extra
 /// elements without a word).
 fn pair<'de, D: serde::Deserializer<'de>>(d: D, field: &str) -> Result<[f64; 2], D::Error> {
@@ -179,6 +199,23 @@ impl Randomization {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn changed_names_the_ranges_set_off_their_defaults() {
+        assert!(Randomization::default().changed().is_empty());
+        let r = Randomization {
+            friction: [0.6, 0.9],
+            yaw: 0.5,
+            ..Randomization::default()
+        };
+        assert_eq!(r.changed(), ["friction", "yaw"]);
+        // `enabled` is not a range.
+        let on = Randomization {
+            enabled: true,
+            ..Randomization::default()
+        };
+        assert!(on.changed().is_empty());
+    }
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

@@ -75,7 +75,7 @@ impl EvalConditions {
         self.randomization.validate().map_err(bad)?;
         // A conditions file is read to perturb: ranges set under `enabled = false` (the
         // default) would leave every trial unperturbed while the results record them.
-        let set = self.randomization_set();
+        let set = self.randomization.changed();
         if !self.randomization.enabled && !set.is_empty() {
             return Err(bad((
                 "randomization.enabled",
@@ -87,23 +87,6 @@ impl EvalConditions {
             )));
         }
         Ok(())
-    }
-
-    /// The `[randomization]` values that differ from the defaults (`enabled` aside).
-    fn randomization_set(&self) -> Vec<&'static str> {
-        let (r, d) = (&self.randomization, Randomization::default());
-        [
-            ("mass_scale", r.mass_scale != d.mass_scale),
-            ("max_mass_kg", r.max_mass_kg != d.max_mass_kg),
-            ("friction", r.friction != d.friction),
-            ("size_scale", r.size_scale != d.size_scale),
-            ("yaw", r.yaw != d.yaw),
-            ("effort_noise", r.effort_noise != d.effort_noise),
-            ("joint_noise", r.joint_noise != d.joint_noise),
-        ]
-        .into_iter()
-        .filter_map(|(name, differs)| differs.then_some(name))
-        .collect()
     }
 
     /// Whether the conditions change anything (the default file changes nothing).
