@@ -51,21 +51,14 @@ pub fn mcnemar_exact(b: usize, c: usize) -> f64 {
     (2.0 * tail).min(1.0)
 }
 
-/// Where an agent's hands started: the pre-grasp planner's name, else `top-down`.
-fn placement(r: &AgentResult) -> String {
-    r.pregrasp
-        .as_ref()
-        .map_or_else(|| "top-down".to_string(), |p| p.name())
-}
-
 /// Why `a` and `b` cannot be paired trial by trial (their trials are not the same
 /// scenes), or `None` when they can.
 pub fn unpaired_reason(a: &AgentResult, b: &AgentResult) -> Option<String> {
-    if placement(a) != placement(b) {
+    if a.placement() != b.placement() {
         return Some(format!(
             "their hands started from different placements ({} and {})",
-            placement(a),
-            placement(b)
+            a.placement(),
+            b.placement()
         ));
     }
     if a.conditions != b.conditions {
@@ -82,12 +75,11 @@ pub fn unpaired_reason(a: &AgentResult, b: &AgentResult) -> Option<String> {
             c(b)
         ));
     }
-    let attempts = |r: &AgentResult| r.retries.as_ref().map_or(1, |s| s.attempts);
-    if attempts(a) != attempts(b) {
+    if a.attempts() != b.attempts() {
         return Some(format!(
             "they had different attempts per trial ({} and {}, `grasp eval --attempts`)",
-            attempts(a),
-            attempts(b)
+            a.attempts(),
+            b.attempts()
         ));
     }
     if a.seed != b.seed {

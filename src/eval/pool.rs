@@ -16,17 +16,6 @@ use super::results::{failure_counts, over_1cm_by_body, ContactStats, LiftStats, 
 use super::{wilson, AgentResult, EvalError, RankStats, RetryStats, TrialFailure};
 use std::path::{Path, PathBuf};
 
-/// The placement of an agent's trials as a name (`top-down`, or the planner's).
-fn placement(r: &AgentResult) -> String {
-    r.pregrasp
-        .as_ref()
-        .map_or_else(|| "top-down".to_string(), |p| p.name())
-}
-
-fn attempts(r: &AgentResult) -> usize {
-    r.retries.as_ref().map_or(1, |s| s.attempts)
-}
-
 fn error(path: &Path, message: String) -> EvalError {
     EvalError::Results {
         path: path.to_path_buf(),
@@ -130,14 +119,14 @@ fn seeds_of(name: &str, list: &[(&Path, &AgentResult)]) -> Result<Vec<u64>, Eval
                 ),
             )
         };
-        if placement(r) != placement(first) {
-            return Err(differs("the placement", placement(first), placement(r)));
+        if r.placement() != first.placement() {
+            return Err(differs("the placement", first.placement(), r.placement()));
         }
-        if attempts(r) != attempts(first) {
+        if r.attempts() != first.attempts() {
             return Err(differs(
                 "attempts per trial",
-                attempts(first).to_string(),
-                attempts(r).to_string(),
+                first.attempts().to_string(),
+                r.attempts().to_string(),
             ));
         }
         if r.conditions != first.conditions {

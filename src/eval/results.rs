@@ -184,6 +184,20 @@ pub struct AgentResult {
     pub recordings: Vec<RecordingEntry>,
 }
 
+impl AgentResult {
+    /// Where the agent's hands started: the pre-grasp planner's name, else `top-down`.
+    pub fn placement(&self) -> String {
+        self.pregrasp
+            .as_ref()
+            .map_or_else(|| "top-down".to_string(), |p| p.name())
+    }
+
+    /// Attempts allowed per trial (1 without `grasp eval --attempts`).
+    pub fn attempts(&self) -> usize {
+        self.retries.as_ref().map_or(1, |s| s.attempts)
+    }
+}
+
 /// Where an agent's hands started when a pre-grasp planner placed them.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct PregraspStats {
