@@ -113,21 +113,35 @@ fn seeds_of(name: &str, list: &[(&Path, &AgentResult)]) -> Result<Vec<u64>, Eval
             error(
                 path,
                 format!(
-                    "agent '{name}' has {what} {b} here and {a} in {}: pooled trials must \
+                    "agent '{name}' has {what}{b} here and {a} in {}: pooled trials must \
                      not differ in it",
                     list[0].0.display()
                 ),
             )
         };
         if r.placement() != first.placement() {
-            return Err(differs("the placement", first.placement(), r.placement()));
+            return Err(differs("the placement ", first.placement(), r.placement()));
         }
         if r.attempts() != first.attempts() {
             return Err(differs(
-                "attempts per trial",
+                "attempts per trial ",
                 first.attempts().to_string(),
                 r.attempts().to_string(),
             ));
+        }
+        // The same placement and attempts by name, but a record of them in one file only
+        // (an edited file: `retries` with one attempt, a planner named `top-down`).
+        let recorded = |x: &AgentResult| {
+            format!(
+                "{} pre-grasp record and {} retry record",
+                if x.pregrasp.is_some() { "a" } else { "no" },
+                if x.retries.is_some() { "a" } else { "no" },
+            )
+        };
+        if r.pregrasp.is_some() != first.pregrasp.is_some()
+            || r.retries.is_some() != first.retries.is_some()
+        {
+            return Err(differs("", recorded(first), recorded(r)));
         }
         if r.conditions != first.conditions {
             let c = |x: &AgentResult| {
@@ -138,7 +152,7 @@ fn seeds_of(name: &str, list: &[(&Path, &AgentResult)]) -> Result<Vec<u64>, Eval
                 }
                 .to_string()
             };
-            return Err(differs("been evaluated in", c(first), c(r)));
+            return Err(differs("been evaluated in ", c(first), c(r)));
         }
         let objects = |x: &AgentResult| x.objects.iter().map(|o| o.object.clone()).collect();
         let (want, have): (Vec<String>, Vec<String>) = (objects(first), objects(r));
@@ -301,8 +315,7 @@ fn pool_agent(name: &str, list: &[(&Path, &AgentResult)]) -> AgentResult {
             p.planned = 0;
             p.default_placement = 0;
             let mut chosen: Vec<usize> = Vec::new();
-            for (_, r) in list {
-                let q = r.pregrasp.as_ref().expect("placements checked equal");
+            for q in list.iter().filter_map(|(_, r)| r.pregrasp.as_ref()) {
                 p.planned += q.planned;
                 p.default_placement += q.default_placement;
                 if let Some(RankStats { chosen: c, .. }) = &q.ranked {
@@ -323,8 +336,7 @@ fn pool_agent(name: &str, list: &[(&Path, &AgentResult)]) -> AgentResult {
             attempts: s.attempts,
             ..RetryStats::default()
         };
-        for (_, r) in list {
-            let q = r.retries.as_ref().expect("attempts checked equal");
+        for q in list.iter().filter_map(|(_, r)| r.retries.as_ref()) {
             pooled.first_attempt_successes += q.first_attempt_successes;
             pooled.retried += q.retried;
             pooled.won_on_retry += q.won_on_retry;
@@ -534,6 +546,17 @@ mod tests {
         let m = msg(&named_twice);
         assert!(
             m.contains("seed1.json") && m.contains("two agents named 'pca8'"),
+            "{m}"
+        );
+        // A retry record in one file only (one attempt each, so the attempts agree).
+        let mut edited = files.clone();
+        edited[0].1[0].retries = Some(RetryStats {
+            attempts: 1,
+            ..RetryStats::default()
+        });
+        let m = msg(&edited);
+        assert!(
+            m.contains("seed1.json") && m.contains("a pre-grasp record and no retry record"),
             "{m}"
         );
         // No seed recorded.
