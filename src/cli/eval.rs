@@ -460,11 +460,7 @@ fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
     let wanted: Vec<String> = a
         .policy
         .iter()
-        .map(|p| match p.as_str() {
-            "baseline1" => AgentSpec::Baseline1.label(),
-            "baseline2" => AgentSpec::Baseline2.label(),
-            other => other.to_string(),
-        })
+        .map(|p| grasp::eval::saved_agent_name(p))
         .collect();
     let mut read = Vec::with_capacity(files.len());
     let mut held: Vec<String> = Vec::new();

@@ -32,8 +32,8 @@ mod tables;
 pub use agent::{policy_step, AgentSpec, PolicyAgent};
 pub use paired::{paired, paired_lines, paired_with_first, unpaired_lines, Paired};
 pub use results::{
-    over_1cm_by_body, physics_line, read_results, select_agents, AgentResult, ContactStats,
-    LiftStats, ObjectResult, PregraspStats, RankStats, TrialFailure,
+    over_1cm_by_body, physics_line, read_results, saved_agent_name, select_agents, AgentResult,
+    ContactStats, LiftStats, ObjectResult, PregraspStats, RankStats, TrialFailure,
 };
 pub use tables::{csv_table, markdown_table};
 

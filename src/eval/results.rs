@@ -517,6 +517,17 @@ fn check_retries(r: &mut AgentResult) -> Result<(), String> {
     Ok(())
 }
 
+/// The name a saved agent goes by in `results` when `--policy` gives `name`: `baseline1`
+/// and `baseline2` name the baselines (saved as "Baseline 1" and "Baseline 2"), any other
+/// name is the agent's own.
+pub fn saved_agent_name(name: &str) -> String {
+    match name {
+        "baseline1" => super::AgentSpec::Baseline1.label(),
+        "baseline2" => super::AgentSpec::Baseline2.label(),
+        other => other.to_string(),
+    }
+}
+
 /// The agents of `results` (read from `path`) that `names` pick, in that order; all of
 /// them when `names` is empty. `baseline1` and `baseline2` name the baselines. A name
 /// that several agents of the file share is refused: it would pick one of them silently.
@@ -535,11 +546,7 @@ pub fn select_agents(
     names
         .iter()
         .map(|p| {
-            let name = match p.as_str() {
-                "baseline1" => super::AgentSpec::Baseline1.label(),
-                "baseline2" => super::AgentSpec::Baseline2.label(),
-                other => other.to_string(),
-            };
+            let name = saved_agent_name(p);
             let found: Vec<&AgentResult> = results.iter().filter(|r| r.agent == name).collect();
             match found.as_slice() {
                 [one] => Ok((*one).clone()),
