@@ -14,6 +14,7 @@
 
 use super::results::{failure_counts, over_1cm_by_body, ContactStats, LiftStats, ObjectResult};
 use super::{wilson, AgentResult, EvalError, RankStats, RetryStats, TrialFailure};
+use crate::util::seq::first_repeat;
 use std::path::{Path, PathBuf};
 
 fn error(path: &Path, message: String) -> EvalError {
@@ -32,17 +33,17 @@ pub fn pool(files: &[(PathBuf, Vec<AgentResult>)]) -> Result<Vec<AgentResult>, E
     }
     let mut names: Vec<&str> = Vec::new();
     for (path, agents) in files {
-        for (k, a) in agents.iter().enumerate() {
-            if agents[..k].iter().any(|b| b.agent == a.agent) {
-                return Err(error(
-                    path,
-                    format!(
-                        "holds two agents named '{}': their trials cannot be told apart \
-                         when pooled",
-                        a.agent
-                    ),
-                ));
-            }
+        let own: Vec<&str> = agents.iter().map(|a| a.agent.as_str()).collect();
+        if let Some(twice) = first_repeat(&own) {
+            return Err(error(
+                path,
+                format!(
+                    "holds two agents named '{twice}': their trials cannot be told apart \
+                     when pooled"
+                ),
+            ));
+        }
+        for a in agents {
             if !names.contains(&a.agent.as_str()) {
                 names.push(&a.agent);
             }

@@ -421,13 +421,12 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         }
         // An evaluation runs each object once (`--objects` refuses a name given twice):
         // a repeated object would be counted twice in the agent's mean and trials.
-        for (k, o) in r.objects.iter().enumerate() {
-            if r.objects[..k].iter().any(|p| p.object == o.object) {
-                return Err(bad(format!(
-                    "agent '{}': object '{}' is listed twice",
-                    r.agent, o.object
-                )));
-            }
+        let names: Vec<&str> = r.objects.iter().map(|o| o.object.as_str()).collect();
+        if let Some(o) = crate::util::seq::first_repeat(&names) {
+            return Err(bad(format!(
+                "agent '{}': object '{o}' is listed twice",
+                r.agent
+            )));
         }
         for o in &mut r.objects {
             let k = o.outcomes.iter().filter(|&&s| s).count();

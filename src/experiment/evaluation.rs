@@ -102,11 +102,7 @@ impl EvalSettings {
         if let Some(s) = self.objects.iter().find(|s| s.trim().is_empty()) {
             return Err(("eval.objects", format!("'{s}' is not an object set")));
         }
-        if let Some(s) = (1..self.objects.len()).find_map(|i| {
-            self.objects[..i]
-                .contains(&self.objects[i])
-                .then(|| &self.objects[i])
-        }) {
+        if let Some(s) = crate::util::seq::first_repeat(&self.objects) {
             return Err(("eval.objects", format!("'{s}' is listed twice")));
         }
         if self.trials > crate::eval::MAX_TRIALS {

@@ -43,6 +43,7 @@ use crate::policy::PolicyKind;
 use crate::train::{metrics, StopReason, TrainConfig, TrainError, TrainSession};
 use crate::util::config::{load_toml, ConfigError};
 use crate::util::fsx::write_atomic;
+use crate::util::seq::first_repeat;
 use curves::Band;
 pub use evaluation::{evaluate_runs, EvalPlacement, EvalSettings, PooledSet, RunEval, EVAL_FILE};
 use serde::{Deserialize, Serialize};
@@ -282,10 +283,7 @@ impl GridConfig {
         if self.seeds.is_empty() {
             return bad("seeds", "list at least one seed".into());
         }
-        let mut seen = self.seeds.clone();
-        seen.sort_unstable();
-        seen.dedup();
-        if seen.len() != self.seeds.len() {
+        if first_repeat(&self.seeds).is_some() {
             return bad("seeds", "a seed is listed twice".into());
         }
         if self.parallel == 0 || self.parallel > 64 {
@@ -321,12 +319,7 @@ impl GridConfig {
                     "list at least one config".into(),
                 );
             }
-            if let Some(c) = a
-                .configs
-                .iter()
-                .enumerate()
-                .find_map(|(i, c)| a.configs[..i].contains(c).then_some(c))
-            {
+            if let Some(c) = first_repeat(&a.configs) {
                 return bad(
                     &format!("ablation[{k}].configs"),
                     format!("{} is listed twice", c.display()),

@@ -1,10 +1,12 @@
 //! Small helpers shared across the crate: atomic writes, TOML configuration loading, a
-//! stable hash, the torque levels, thread counts, numbers in messages and the statistics of measurements.
+//! stable hash, the torque levels, thread counts, numbers in messages, repeats in lists
+//! and the statistics of measurements.
 
 pub mod config;
 pub mod fsx;
 pub mod hash;
 pub mod levels;
 pub mod num;
+pub mod seq;
 pub mod stats;
 pub mod threads;
