@@ -562,6 +562,29 @@ mod tests {
         );
         assert!(rec.frames.iter().all(|f| f.stage != "control"));
         assert!(rec.control.is_empty());
+        // The forces: before the hand moves, nothing touches the object but the table,
+        // which carries its weight; at the lift's end of a held object the hand carries
+        // it, the table nothing, and the distal phalanges are part of the hand.
+        let f0 = &rec.frames[0].frame;
+        assert_eq!(f0.hand_force, 0.0);
+        assert_eq!(f0.tip_force, [0.0; 5]);
+        let weight = ObjectSpec::default_box().mass * 9.81;
+        assert!(
+            (f0.table_force as f64 - weight).abs() < 0.1 * weight,
+            "{} vs {weight}",
+            f0.table_force
+        );
+        if rec.summary.success {
+            let last = &rec.frames.last().unwrap().frame;
+            assert_eq!(last.table_force, 0.0);
+            assert!(last.hand_force as f64 > 0.5 * weight, "{}", last.hand_force);
+            let tips: f32 = last.tip_force.iter().sum();
+            assert!(
+                tips <= last.hand_force + 1e-3,
+                "{tips} > {}",
+                last.hand_force
+            );
+        }
     }
 
     #[test]

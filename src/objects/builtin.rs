@@ -42,7 +42,9 @@ fn friction_of(kind: ObjectKind) -> f64 {
         ObjectKind::ShapenetLike => 0.75,
         ObjectKind::Egad => 0.9,
         ObjectKind::Primitive => 0.7,
-        ObjectKind::User | ObjectKind::Procedural => super::spec::DEFAULT_FRICTION,
+        ObjectKind::User | ObjectKind::Procedural | ObjectKind::Real => {
+            super::spec::DEFAULT_FRICTION
+        }
     }
 }
 

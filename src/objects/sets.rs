@@ -7,7 +7,9 @@
 //!
 //! `train`, `unseen`, `all`; `procedural` (the first 64 objects of the procedural stream,
 //! see [`super::stream`]); `validation` (24 objects of another stream seed, the set
-//! checkpoints are chosen on); a folder of `.obj`/`.stl` files (one object each, named by
+//! checkpoints are chosen on); `real-validation` and `real` (household objects nobody here
+//! made, at real masses: the validation set's real slice and the real report set, the
+//! manifests in `assets/meshes/real/`, see [`REAL_SETS`]); a folder of `.obj`/`.stl` files (one object each, named by
 //! the file stem, default density and friction); a manifest `.toml` (see [`super::spec`]);
 //! a single `.obj`/`.stl` file; or a comma-separated list of built-in object names and
 //! stream objects (`proc-<seed>-<index>`).
@@ -28,6 +30,34 @@ pub fn load_objects(arg: &str, ctx: &BuildContext) -> Result<Vec<Object>, Object
     build_all(&resolve_specs(arg)?, ctx)
 }
 
+/// The sets of real household objects: each name and its manifest under the project's
+/// `assets/` folder. `real-validation` is the validation set's real slice (recipes and
+/// checkpoints are chosen on it with `validation`); `real` is the real report set.
+pub const REAL_SETS: [(&str, &str); 2] = [
+    ("real-validation", "meshes/real/validation.toml"),
+    ("real", "meshes/real/report.toml"),
+];
+
+/// A file the project ships under `assets/`: `assets/<rel>` under the working directory,
+/// or else under the folder the binary was built from (so a shipped set loads from any
+/// folder); the error names both places.
+pub fn shipped_asset(rel: &str) -> Result<PathBuf, ObjectError> {
+    let here = Path::new("assets").join(rel);
+    if here.exists() {
+        return Ok(here);
+    }
+    let built = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(rel);
+    if built.exists() {
+        return Ok(built);
+    }
+    Err(ObjectError::Io {
+        path: format!("{} (nor {})", here.display(), built.display()),
+        error: std::io::Error::new(std::io::ErrorKind::NotFound, "a shipped file is missing"),
+    })
+}
+
 fn levenshtein(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();
     let mut prev: Vec<usize> = (0..=b.len()).collect();
@@ -46,6 +76,7 @@ fn levenshtein(a: &str, b: &str) -> usize {
 /// Up to five known names close to `name` (edit distance or substring).
 pub fn suggest(name: &str) -> Vec<String> {
     let mut known: Vec<String> = BUILTIN_SETS.iter().map(|s| s.to_string()).collect();
+    known.extend(REAL_SETS.iter().map(|(s, _)| s.to_string()));
     known.extend(
         builtin_set("all")
             .unwrap_or_default()
@@ -71,8 +102,9 @@ pub fn suggest(name: &str) -> Vec<String> {
 fn unknown(name: &str) -> ObjectError {
     let sugg = suggest(name);
     let mut hint = format!(
-        "known sets are {}, procedural (or a folder of .obj/.stl files, a manifest .toml, a mesh file, or a comma-separated list of built-in object names; `grasp objects list` shows them)",
-        BUILTIN_SETS.join(", ")
+        "known sets are {}, procedural, validation, {} (or a folder of .obj/.stl files, a manifest .toml, a mesh file, or a comma-separated list of built-in object names; `grasp objects list` shows them)",
+        BUILTIN_SETS.join(", "),
+        REAL_SETS.map(|(s, _)| s).join(", ")
     );
     if !sugg.is_empty() {
         hint.push_str(&format!("; did you mean {}?", sugg.join(", ")));
@@ -149,6 +181,10 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
             super::stream::VALIDATION_COUNT,
         ));
     }
+    if let Some((_, rel)) = REAL_SETS.iter().find(|(name, _)| *name == arg) {
+        let manifest = shipped_asset(rel)?;
+        return resolve_specs(&manifest.to_string_lossy());
+    }
     let path = Path::new(arg);
     let src = path.display().to_string();
     let looks_like_path = arg.contains('/')
@@ -217,6 +253,7 @@ pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
     let mut out = Vec::new();
     for name in arg.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         if BUILTIN_SETS.contains(&name)
+            || REAL_SETS.iter().any(|(s, _)| *s == name)
             || name == super::stream::STREAM_SET
             || name == super::stream::VALIDATION_SET
         {
@@ -372,6 +409,31 @@ mod tests {
         let e = resolve_specs("mug,mug").unwrap_err().to_string();
         assert!(e.contains("duplicate"), "{e}");
         assert_eq!(resolve_specs("mug, banana").unwrap().len(), 2);
+    }
+
+    #[test]
+    fn real_sets_load_from_the_shipped_manifests_at_real_masses() {
+        let mut names = HashSet::new();
+        for (set, min_count) in [("real-validation", 11)] {
+            let specs = resolve_specs(set).unwrap_or_else(|e| panic!("{set}: {e}"));
+            assert!(specs.len() >= min_count, "{set}: {} objects", specs.len());
+            for rs in &specs {
+                let s = &rs.spec;
+                // One object in one set only: the report set shares nothing with validation.
+                assert!(names.insert(s.name.clone()), "{set}: {} twice", s.name);
+                let m = s
+                    .mass_kg
+                    .unwrap_or_else(|| panic!("{}: no real mass", s.name));
+                assert!((0.02..=1.0).contains(&m), "{}: {m} kg", s.name);
+                assert!(s.friction <= 1.0);
+                let p = prepare(rs).unwrap_or_else(|e| panic!("{}: {e}", s.name));
+                let e = p.mesh.aabb().unwrap().extents();
+                assert!(e[0].min(e[1]) <= 0.12, "{}: {e:?}", s.name);
+                assert!(e.iter().all(|&x| x <= 0.3), "{}: {e:?}", s.name);
+            }
+        }
+        // In a name list a set name is refused, as the other sets' are.
+        assert!(resolve_specs("mug,real").is_err());
     }
 
     #[test]

@@ -65,6 +65,9 @@ pub enum ObjectKind {
     User,
     /// An object of the procedural training stream ([`super::stream`]).
     Procedural,
+    /// A real household object: a scan or model of a real product at a real mass
+    /// (`assets/meshes/real/`).
+    Real,
 }
 
 impl ObjectKind {
@@ -77,6 +80,7 @@ impl ObjectKind {
             ObjectKind::Primitive => "primitive",
             ObjectKind::User => "user",
             ObjectKind::Procedural => "procedural",
+            ObjectKind::Real => "real",
         }
     }
 }

@@ -94,6 +94,16 @@ pub struct SimFrame {
     pub tactile: [u8; 5],
     /// Torque levels 0..=5 of the 20 actuators.
     pub torque_level: [u8; 20],
+    /// Normal force (N) between the object and each distal phalanx (FF, MF, RF, LF, TH),
+    /// as [`HandSim::tip_forces`] measures it (rounded to 1 mN).
+    #[serde(default)]
+    pub tip_force: [f32; 5],
+    /// Normal force (N) between the object and the whole hand (rounded to 1 mN).
+    #[serde(default)]
+    pub hand_force: f32,
+    /// Normal force (N) between the object and the table (rounded to 1 mN).
+    #[serde(default)]
+    pub table_force: f32,
     /// Height of the lift above its start (m).
     pub lift: f32,
     /// Whether the arm is lifting (the lift target is above its start).
@@ -244,6 +254,9 @@ impl HandSim {
             object: [0, 1, 2, 3, 4, 5, 6].map(|k| round(o[k], 1e5)),
             tactile: s.tactile,
             torque_level: s.torque_level,
+            tip_force: self.tip_forces().map(|f| round(f as f32, 1e3)),
+            hand_force: round(self.hand_object_force() as f32, 1e3),
+            table_force: round(self.table_object_force() as f32, 1e3),
             lift: if lift.is_finite() {
                 round(lift as f32, 1e5)
             } else {
