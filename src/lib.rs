@@ -11,7 +11,8 @@
 //! - [`perception`]: point clouds, the simulated depth cameras and the antipodal pre-grasp
 //!   planner (used by the environment and by `grasp run`).
 //! - [`sim`]: the Rapier simulation of hand, table and object, with tactile and torque sensing.
-//! - [`util`]: small shared helpers (atomic file writes, TOML configs).
+//! - [`util`]: small shared helpers (atomic file writes, TOML configs, where a default
+//!   naming a shipped file lies from any working directory).
 //! - [`env`](mod@env): the gymnasium-style environment API, a parallel vector of environments and a
 //!   textbook control task.
 //! - [`eval`]: per-object success rates with Wilson intervals, Table-I layout; episode
@@ -20,6 +21,11 @@
 //!   style plots.
 //! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
+//! - [`checkpoint`]: the checkpoint folder: its file names, the training config's schema
+//!   and a checkpoint's setup (MDP, synergy model, simulator config), read back by
+//!   evaluation, `grasp run`, experiments and the Python module.
+//! - [`train`]: training runs (`grasp train` as a library): the run folder, metrics,
+//!   TensorBoard events, the learning-curve plot and the environments of a config.
 //! - [`run`]: grasp attempts on a hand-arm system: the simulator behind the hardware
 //!   interface, tactile calibration and the grasp pipeline of Sec. V-B.
 //! - `python` (feature `python`): the PyO3 module `grasp_rl._core`, a thin layer over

@@ -532,6 +532,37 @@ fn grasp_run_ramps_the_grip_as_the_checkpoint_config_says() {
 }
 
 #[test]
+fn the_default_policy_is_found_from_any_working_directory() {
+    // `grasp run` without --policy, started in an empty folder: the default policy is a
+    // path relative to the repository, found under the crate's source folder when the
+    // working directory does not hold it (grasp::util::assets).
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_grasp"))
+        .current_dir(dir.path())
+        .args([
+            "run",
+            "--backend",
+            "sim",
+            "--json",
+            "--object",
+            "box",
+            "--seed",
+            "1",
+        ])
+        .args(["--log", "attempt.jsonl"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        v["policy"], "assets/policies/grip_long_gru_m3_pca5",
+        "{v:#}"
+    );
+    assert!(dir.path().join("attempt.jsonl").exists());
+}
+
+#[test]
 fn bad_inputs_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let bad_cal = dir.path().join("cal.json");

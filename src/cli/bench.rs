@@ -5,9 +5,16 @@ use clap::{Args, Subcommand};
 use grasp::robot::{Robot, Side};
 use grasp::sim::bench::{self, BenchFigures};
 use grasp::sim::SimConfig;
+use grasp::util::assets;
 use std::path::PathBuf;
 
 use super::Global;
+
+/// `bench regression`'s default reference, a shipped file found from any working
+/// directory ([`grasp::util::assets`]).
+const REFERENCE: &str = "ci/reference.json";
+/// `bench regression`'s default policy (the one ci/reference.json was measured with).
+const REGRESSION_POLICY: &str = "assets/policies/quick_gru_m3_pca5";
 
 /// Measure throughput.
 #[derive(Debug, Args)]
@@ -44,13 +51,13 @@ pub enum BenchCommand {
 #[derive(Debug, Args)]
 pub struct BenchRegressionArgs {
     /// The reference figures (JSON).
-    #[arg(long, default_value = "ci/reference.json")]
+    #[arg(long, default_value = REFERENCE)]
     pub reference: PathBuf,
     /// Write the measured figures as the new reference (atomically) instead of comparing.
     #[arg(long)]
     pub update: bool,
     /// The policy checkpoint folder.
-    #[arg(long, default_value = "assets/policies/quick_gru_m3_pca5")]
+    #[arg(long, default_value = REGRESSION_POLICY)]
     pub policy: PathBuf,
     /// Objects.
     #[arg(long, default_value = "box_gelatin,cylinder_wood,can_soup,apple")]
@@ -133,30 +140,34 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
         anyhow::bail!("--trials, --envs and --steps must be at least 1");
     }
     // Read the reference first: a broken file is reported before minutes of measuring.
+    // --update writes where it is told (created if need be); a read finds the default.
     let reference = if a.update {
         None
     } else {
-        let text = std::fs::read_to_string(&a.reference).with_context(|| {
+        let path = assets::default_or_given(&a.reference, REFERENCE, "--reference")
+            .unwrap_or_else(|_| a.reference.clone());
+        let text = std::fs::read_to_string(&path).with_context(|| {
             format!(
                 "reading the reference {} (create it with --update)",
-                a.reference.display()
+                path.display()
             )
         })?;
         let r: Reference = serde_json::from_str(&text)
-            .with_context(|| format!("parsing the reference {}", a.reference.display()))?;
+            .with_context(|| format!("parsing the reference {}", path.display()))?;
         Some(r)
     };
+    let policy = assets::default_or_given(&a.policy, REGRESSION_POLICY, "--policy")?;
     let setup = RegressionSetup {
         objects: super::rollout::sim_objects(&a.objects)?,
         trials: a.trials,
         seed: g.seed.unwrap_or(0),
-        policy: a.policy.clone(),
+        policy: policy.clone(),
         threads: super::rollout::threads(a.threads)?,
         throughput_envs: a.envs,
         throughput_steps: a.steps,
     };
     let figures =
-        measure(&setup).with_context(|| format!("measuring with {}", a.policy.display()))?;
+        measure(&setup).with_context(|| format!("measuring with {}", policy.display()))?;
     let Some(reference) = reference else {
         let r = Reference::from_figures(figures);
         let text = serde_json::to_string_pretty(&r)? + "\n";

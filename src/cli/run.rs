@@ -16,6 +16,7 @@ use grasp::run::pipeline::{
 };
 use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
 use grasp::sim::{ObjectSpec, SimConfig};
+use grasp::util::assets;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -54,8 +55,9 @@ pub struct RunArgs {
     #[arg(long, value_enum, default_value = "sim")]
     pub backend: Backend,
     /// Checkpoint folder of the policy (default: the shipped policy that lifted the most
-    /// validation objects from the pre-grasp, the placement `grasp run` plans).
-    #[arg(long, default_value = "assets/policies/grip_long_gru_m3_pca5")]
+    /// validation objects from the pre-grasp, the placement `grasp run` plans; found from
+    /// any working directory, see docs/robot-hardware.md).
+    #[arg(long, default_value = grasp::run::DEFAULT_POLICY)]
     pub policy: PathBuf,
     /// Two-finger grasp file (TOML or JSON).
     #[arg(long, conflicts_with_all = ["cloud", "center"])]
@@ -237,8 +239,9 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
     super::check_attempts(a.attempts, "grasp attempts on the object")?;
     let seed = g.seed.unwrap_or(0);
     let robot = Robot::builtin(Side::Left);
-    let mut policy = PolicyRunner::load(&a.policy)
-        .with_context(|| format!("loading policy {}", a.policy.display()))?;
+    let policy_dir = assets::default_or_given(&a.policy, grasp::run::DEFAULT_POLICY, "--policy")?;
+    let mut policy = PolicyRunner::load(&policy_dir)
+        .with_context(|| format!("loading policy {}", policy_dir.display()))?;
     let calibration = match &a.calibration {
         Some(p) => Some(TactileCalibration::load(p)?),
         None => None,

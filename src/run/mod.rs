@@ -13,6 +13,12 @@
 //!   lift), logged step by step.
 
 pub mod calibrate;
+
+/// The policy `grasp run` acts with unless `--policy` names another: the shipped policy
+/// with the most validation successes from the pre-grasp `grasp run` plans (the rule and
+/// its measurement: docs/robot-hardware.md, "The default policy"). A path relative to the
+/// repository, found from any working directory by [`crate::util::assets::shipped`].
+pub const DEFAULT_POLICY: &str = "assets/policies/grip_long_gru_m3_pca5";
 pub mod pipeline;
 pub mod plan;
 pub mod sim_backend;

@@ -1,7 +1,9 @@
-//! Small helpers shared across the crate: atomic writes, TOML configuration loading, a
-//! stable hash, the torque levels, thread counts, numbers in messages, repeats in lists
-//! and the statistics of measurements.
+//! Small helpers shared across the crate: where a default naming a shipped file lies
+//! ([`assets`]), atomic writes, TOML configuration loading, a stable hash, the torque
+//! levels, thread counts, numbers in messages, repeats in lists and the statistics of
+//! measurements.
 
+pub mod assets;
 pub mod config;
 pub mod fsx;
 pub mod hash;
