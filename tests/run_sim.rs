@@ -555,10 +555,7 @@ fn the_default_policy_is_found_from_any_working_directory() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(
-        v["policy"], "assets/policies/grip_long_gru_m3_pca5",
-        "{v:#}"
-    );
+    assert_eq!(v["policy"], "assets/policies/fig5_gru_m3_pca8", "{v:#}");
     assert!(dir.path().join("attempt.jsonl").exists());
 }
 

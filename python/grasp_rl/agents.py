@@ -27,7 +27,7 @@ class Policy:
 
     @classmethod
     def shipped(cls, stochastic: bool = False, seed: int = 0) -> "Policy":
-        """The shipped policy ``assets/policies/quick_gru_m3_pca5`` (embedded in the module)."""
+        """The shipped policy ``assets/policies/fig5_gru_m3_pca8`` (embedded in the module; ``grasp run``'s default)."""
         p = cls.__new__(cls)
         p._core = _core.CorePolicy.shipped(stochastic, seed)
         return p

@@ -38,23 +38,13 @@ pub const REAL_SETS: [(&str, &str); 2] = [
     ("real", "meshes/real/report.toml"),
 ];
 
-/// A file the project ships under `assets/`: `assets/<rel>` under the working directory,
-/// or else under the folder the binary was built from (so a shipped set loads from any
-/// folder); the error names both places.
-pub fn shipped_asset(rel: &str) -> Result<PathBuf, ObjectError> {
-    let here = Path::new("assets").join(rel);
-    if here.exists() {
-        return Ok(here);
-    }
-    let built = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets")
-        .join(rel);
-    if built.exists() {
-        return Ok(built);
-    }
-    Err(ObjectError::Io {
-        path: format!("{} (nor {})", here.display(), built.display()),
-        error: std::io::Error::new(std::io::ErrorKind::NotFound, "a shipped file is missing"),
+/// The manifest of a shipped set, found from any working folder by the one rule for
+/// shipped files ([`crate::util::assets::shipped`]).
+fn shipped_asset(rel: &str) -> Result<PathBuf, ObjectError> {
+    let path = Path::new("assets").join(rel);
+    crate::util::assets::shipped(&path, "--objects").map_err(|e| ObjectError::Io {
+        path: path.display().to_string(),
+        error: std::io::Error::new(std::io::ErrorKind::NotFound, e.to_string()),
     })
 }
 

@@ -33,25 +33,25 @@ pub struct CorePolicy {
     dir: PathBuf,
 }
 
-/// The shipped policy (`assets/policies/quick_gru_m3_pca5/`), embedded: the files a
+/// The shipped policy (`assets/policies/fig5_gru_m3_pca8/`), embedded: the files a
 /// checkpoint folder needs.
 const SHIPPED: [(&str, &[u8]); 3] = [
     (
         "checkpoint.safetensors",
-        include_bytes!("../../assets/policies/quick_gru_m3_pca5/checkpoint.safetensors"),
+        include_bytes!("../../assets/policies/fig5_gru_m3_pca8/checkpoint.safetensors"),
     ),
     (
         "config.toml",
-        include_bytes!("../../assets/policies/quick_gru_m3_pca5/config.toml"),
+        include_bytes!("../../assets/policies/fig5_gru_m3_pca8/config.toml"),
     ),
     (
         "synergy.json",
-        include_bytes!("../../assets/policies/quick_gru_m3_pca5/synergy.json"),
+        include_bytes!("../../assets/policies/fig5_gru_m3_pca8/synergy.json"),
     ),
 ];
 
 /// The shipped policy's folder in the repository.
-pub const SHIPPED_DIR: &str = "assets/policies/quick_gru_m3_pca5";
+pub const SHIPPED_DIR: &str = "assets/policies/fig5_gru_m3_pca8";
 
 impl CorePolicy {
     fn load(dir: PathBuf, stochastic: bool, seed: u64) -> PyResult<Self> {
@@ -84,14 +84,14 @@ impl CorePolicy {
         Self::load(dir, stochastic, seed)
     }
 
-    /// The shipped policy (assets/policies/quick_gru_m3_pca5, embedded in the module),
+    /// The shipped policy (assets/policies/fig5_gru_m3_pca8, embedded in the module),
     /// unpacked into a temporary folder that is removed once it is loaded.
     #[staticmethod]
     #[pyo3(signature = (stochastic=false, seed=0))]
     fn shipped(stochastic: bool, seed: u64) -> PyResult<Self> {
         let tmp = tempfile::tempdir()
             .map_err(|e| PyRuntimeError::new_err(format!("temporary folder: {e}")))?;
-        let dir = tmp.path().join("quick_gru_m3_pca5");
+        let dir = tmp.path().join("fig5_gru_m3_pca8");
         for (name, bytes) in SHIPPED {
             crate::util::fsx::write_atomic(&dir.join(name), bytes)
                 .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;

@@ -15,10 +15,11 @@
 pub mod calibrate;
 
 /// The policy `grasp run` acts with unless `--policy` names another: the shipped policy
-/// with the most validation successes from the pre-grasp `grasp run` plans (the rule and
-/// its measurement: docs/robot-hardware.md, "The default policy"). A path relative to the
-/// repository, found from any working directory by [`crate::util::assets::shipped`].
-pub const DEFAULT_POLICY: &str = "assets/policies/grip_long_gru_m3_pca5";
+/// with the most successes from the pre-grasp `grasp run` plans on the validation set and
+/// its real slice (the rule and its measurement: docs/robot-hardware.md, "The default
+/// policy"); Python's `grasp_rl.Policy.shipped()` embeds the same one. A path relative to
+/// the repository, found from any working directory by [`crate::util::assets::shipped`].
+pub const DEFAULT_POLICY: &str = "assets/policies/fig5_gru_m3_pca8";
 pub mod pipeline;
 pub mod plan;
 pub mod sim_backend;
