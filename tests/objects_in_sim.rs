@@ -117,6 +117,33 @@ fn every_builtin_object_rests_stably_on_the_table() {
     assert!(bad.is_empty(), "objects not at rest: {bad:#?}");
 }
 
+/// The real household objects (the validation set's real slice and the real report
+/// set: scans and models of real products at real masses) rest as the built-in objects
+/// do, for 3 s with the built-in config: no physics failure, less than 5 mm and 0.15 rad
+/// from their start, still over the last second.
+#[test]
+fn real_objects_rest_stably_on_the_table() {
+    let mut objs = specs("real-validation");
+    objs.extend(specs("real"));
+    assert!(objs.len() >= 23, "{} objects", objs.len());
+    let cfg = SimConfig::default();
+    let results: Vec<Rest> = objs
+        .par_iter()
+        .map_init(|| new_sim(&objs[0], &cfg), |sim, o| rest(sim, o, 3.0))
+        .collect();
+    let bad: Vec<&Rest> = results
+        .iter()
+        .filter(|r| {
+            r.failure.is_some()
+                || r.drift >= 0.005
+                || r.tilt >= 0.15
+                || r.late_drift >= 0.0005
+                || r.late_tilt >= 0.01
+        })
+        .collect();
+    assert!(bad.is_empty(), "objects not at rest: {bad:#?}");
+}
+
 /// Objects of the scripted-grasp check: boxes, cans, a mug, a bowl, a hammer, a bottle,
 /// EGAD-like shapes, flat and tall ones.
 const GRASP_SUBSET: &str = "box_gelatin,box_sugar,cylinder_wood,can_soup,can_tuna,mug,bowl,\

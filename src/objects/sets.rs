@@ -404,7 +404,7 @@ mod tests {
     #[test]
     fn real_sets_load_from_the_shipped_manifests_at_real_masses() {
         let mut names = HashSet::new();
-        for (set, min_count) in [("real-validation", 11)] {
+        for (set, min_count) in [("real-validation", 11), ("real", 12)] {
             let specs = resolve_specs(set).unwrap_or_else(|e| panic!("{set}: {e}"));
             assert!(specs.len() >= min_count, "{set}: {} objects", specs.len());
             for rs in &specs {
