@@ -136,12 +136,14 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
     let reference = if a.update {
         None
     } else {
-        let text = std::fs::read_to_string(&a.reference).with_context(|| {
-            format!(
-                "reading the reference {} (create it with --update)",
-                a.reference.display()
-            )
-        })?;
+        let text =
+            grasp::util::fsx::read_to_string_bounded(&a.reference, grasp::util::fsx::limits::DATA)
+                .with_context(|| {
+                    format!(
+                        "reading the reference {} (create it with --update)",
+                        a.reference.display()
+                    )
+                })?;
         let r: Reference = serde_json::from_str(&text)
             .with_context(|| format!("parsing the reference {}", a.reference.display()))?;
         Some(r)
