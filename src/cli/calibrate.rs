@@ -52,6 +52,21 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
     if a.still < grasp::hardware::calibration::MIN_STILL_READINGS {
         bail!("--still must be at least 10 (Sec. V-C), got {}", a.still);
     }
+    {
+        use grasp::util::fsx::{check_outputs, check_writable_file, Named};
+        let mut inputs = Vec::new();
+        if let Some(p) = &a.sim_config {
+            inputs.push(Named::new("--sim-config", p));
+        }
+        let object = std::path::Path::new(&a.object);
+        if object.is_file() {
+            inputs.push(Named::new("--object", object));
+        }
+        check_outputs(&inputs, &[Named::new("--out", &a.out)], &[])?;
+        // Checked before the presses: a calibration is not thrown away by its write.
+        check_writable_file(&a.out)
+            .map_err(|e| anyhow::anyhow!("--out {}: {}", a.out.display(), e.source))?;
+    }
     let report: CalibrationReport = match a.backend {
         Backend::Sim => {
             if !(a.press_force.is_finite() && a.press_force > 0.0) {

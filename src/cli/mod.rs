@@ -74,6 +74,15 @@ impl RecordArgs {
     }
 }
 
+/// The files of the checkpoint folder `dir` that a command reads (weights, config.toml,
+/// synergy.json): no output may replace them.
+pub fn checkpoint_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    use grasp::checkpoint::files;
+    [grasp::ppo::CHECKPOINT_FILE, files::CONFIG, files::SYNERGY]
+        .map(|f| dir.join(f))
+        .to_vec()
+}
+
 /// Teach a Shadow hand on a UR10e arm to grasp unseen objects: hand synergies, a Rapier
 /// simulation with tactile and torque sensing, PPO with a GRU policy, evaluation, and
 /// execution on a real robot.
