@@ -96,6 +96,13 @@ impl Default for PpoConfig {
     }
 }
 
+/// The most bytes a rollout's buffers may take: 8 GiB.
+pub const MAX_ROLLOUT_BYTES: u64 = 8 << 30;
+
+/// The observation width assumed when bounding the rollout buffers before the
+/// environment is built (the grasping observations are a few hundred values).
+const ROLLOUT_OBS_ESTIMATE: u64 = 512;
+
 impl PpoConfig {
     /// Loads a TOML config file (unknown keys are errors naming line and column).
     pub fn load(path: &Path) -> Result<Self, PpoError> {
@@ -156,6 +163,25 @@ impl PpoConfig {
         real("reward_clip", self.reward_clip, 0.0, 1e6, true)?;
         if let Some(kl) = self.target_kl {
             real("target_kl", kl, 0.0, 1e6, true)?;
+        }
+        // The rollout buffers hold each transition's observation, recurrent state and a
+        // few scalars; bounded before anything is allocated.
+        let per_transition = 4 * (ROLLOUT_OBS_ESTIMATE + 2 * self.policy.gru_hidden as u64 + 16);
+        let transitions = self.num_envs as u64 * self.num_steps as u64;
+        let bytes = transitions.saturating_mul(per_transition);
+        if bytes > MAX_ROLLOUT_BYTES {
+            return Err(bad(
+                "num_steps",
+                format!(
+                    "num_envs = {} x num_steps = {} is {transitions} transitions per rollout, \
+                     about {} GB of buffers (more than the limit of {} GB); lower num_envs or \
+                     num_steps",
+                    self.num_envs,
+                    self.num_steps,
+                    bytes >> 30,
+                    MAX_ROLLOUT_BYTES >> 30
+                ),
+            ));
         }
         let mb = self.num_minibatches;
         if mb > self.batch_size() {
