@@ -755,7 +755,12 @@ fn lift_and_judge<B: HandArm>(
         Some(s) => (s, "simulator"),
         None => (contacts >= cfg.held_min_contacts, "tactile sensors"),
     };
-    let reason = if success {
+    let reason = if success && contacts == 0 {
+        // Held, yet no fingertip says so: the calibration's ranges do not fit the sensors.
+        "held after the lift, but no fingertip sensor reports contact: the tactile \
+         calibration does not fit the sensors (recalibrate)"
+            .to_string()
+    } else if success {
         format!("held after the lift ({contacts} fingertips in contact)")
     } else {
         format!("not held after the lift ({contacts} fingertips in contact)")
