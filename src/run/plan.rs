@@ -145,16 +145,21 @@ fn solve_arm(
     Ok((q_pre, q_grasp))
 }
 
-/// How far below the table top (z = 0 in the world frame of grasps and clouds) a
-/// fingertip or the palm may be planned (m): the fingers of a preshape reach a little
-/// below the grasp point of an object lying on the table, the table's edge and padding
-/// take no more.
+/// How far below the table top (z = 0 in the world frame of grasps and clouds) the palm
+/// may be planned (m).
 pub const TABLE_MARGIN_M: f64 = 0.02;
 
+/// How far below the table top a fingertip of the preshape may be planned (m): over a
+/// flat object the open fingers reach past it and are stopped by the table as they close
+/// (the spatula's plan puts one 3.7 cm below the top and lifts it); deeper, the hand
+/// itself would go into the table.
+pub const FINGERTIP_TABLE_MARGIN_M: f64 = 0.06;
+
 /// Refuses a grasp whose hand would go into the table, before any command: the grasp
-/// centre below the table top, or the palm or a fingertip (in the preshape) more than
-/// [`TABLE_MARGIN_M`] below it at the pre-grasp pose or the grasp pose (the approach
-/// between them is a straight line, so its ends bound it).
+/// centre below the table top, the palm more than [`TABLE_MARGIN_M`] or a fingertip (in
+/// the preshape) more than [`FINGERTIP_TABLE_MARGIN_M`] below it at the pre-grasp pose
+/// or the grasp pose (the approach between them is a straight line, so its ends bound
+/// it).
 fn check_above_table(
     robot: &Robot,
     preshape: &[f64; 24],
@@ -167,13 +172,14 @@ fn check_above_table(
     let palm = crate::robot::grasp_map::palm_pose_for(robot, preshape, grasp)
         .map_err(|e| RunError::BadGrasp(e.to_string()))?;
     let tips = robot.fingertips_palm(preshape);
-    let names = ["the palm", "a fingertip"];
     for (stage, shift) in [("grasp", Vector3::zeros()), ("pre-grasp", *back)] {
-        let points = std::iter::once((names[0], palm * Point3::origin()))
-            .chain(tips.iter().map(|t| (names[1], palm * t)));
-        for (what, p) in points {
+        let points = std::iter::once(("the palm", palm * Point3::origin(), TABLE_MARGIN_M)).chain(
+            tips.iter()
+                .map(|t| ("a fingertip", palm * t, FINGERTIP_TABLE_MARGIN_M)),
+        );
+        for (what, p, margin) in points {
             let p = p + shift;
-            if p.z < -TABLE_MARGIN_M {
+            if p.z < -margin {
                 return Err(RunError::BadGrasp(format!(
                     "at the {stage} pose {what} would be at {}, {} m below the table top \
                      (z = 0): the hand would be driven into the table",
