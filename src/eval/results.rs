@@ -506,6 +506,30 @@ fn check_counts(r: &AgentResult, n_all: usize) -> Result<(), String> {
             return Err(format!("agent '{agent}': `{field}` is not a finite number"));
         }
     }
+    for (field, v) in [
+        ("mean_steps", r.mean_steps),
+        ("control_steps_per_s", r.control_steps_per_s),
+        ("wall_s", r.wall_s),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "agent '{agent}': `{field}` {} must be a finite number >= 0",
+                crate::util::num::short(v)
+            ));
+        }
+    }
+    if let Some(p) = &r.pregrasp {
+        let episodes = n_all.saturating_mul(r.attempts().max(1));
+        if p.planned.saturating_add(p.default_placement) > episodes {
+            return Err(format!(
+                "agent '{agent}': `pregrasp` places {} + {} episodes, more than its {n_all} \
+                 trials of {} attempts",
+                p.planned,
+                p.default_placement,
+                r.attempts().max(1)
+            ));
+        }
+    }
     for (field, n) in [
         ("physics_failures", r.physics_failures),
         ("lifts.lifted", l.lifted),
@@ -770,6 +794,15 @@ mod tests {
             |x| x.physics_failures = 99,
             |x| x.lifts.lifted = 5,
             |x| x.objects[0].physics_failures = 5,
+            |x| x.control_steps_per_s = -1.0,
+            |x| {
+                x.pregrasp = Some(PregraspStats {
+                    placement: "antipodal".into(),
+                    planned: 4,
+                    default_placement: 1,
+                    ranked: None,
+                })
+            },
         ] {
             let mut bad = r.clone();
             edit(&mut bad);
