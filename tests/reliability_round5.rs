@@ -166,6 +166,19 @@ fn training_never_goes_into_a_checkpoint_or_a_foreign_folder() {
     let o = grasp(&["train", "--config", s(&cfg), "--out", "."]);
     assert_fails(&o, &["not a run folder"]);
     assert!(!repo("config.toml").exists() && !repo(".lock").exists());
+    // A grid's output folder likewise: no reports among the user's files.
+    for out in [&ck, &other] {
+        let o = grasp(&[
+            "experiment",
+            "--grid",
+            "configs/grids/tiny_grid.toml",
+            "--out",
+            s(out),
+        ]);
+        assert_fails(&o, &["--out", "run the grid into a new folder"]);
+    }
+    assert_eq!(std::fs::read_dir(&other).unwrap().count(), 1);
+    assert!(!ck.join("summary.md").exists());
 }
 
 /// Every file input was read without bound: `--from-json /dev/zero` grew to gigabytes and

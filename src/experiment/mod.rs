@@ -174,6 +174,14 @@ pub enum ExperimentError {
         /// The output folder.
         dir: PathBuf,
     },
+    /// The output folder is no grid's (a checkpoint folder, a folder of other files).
+    #[error("--out {dir} {why}: run the grid into a new folder")]
+    NotAGridFolder {
+        /// The folder.
+        dir: PathBuf,
+        /// What it is instead.
+        why: String,
+    },
     /// `--resume` of a grid whose edits change how its runs are trained.
     #[error(
         "cannot resume {dir}: the grid now trains it differently from how it was trained \
@@ -547,6 +555,7 @@ pub fn run_grid(
             dir: plan.out.clone(),
         });
     }
+    check_out_folder(plan)?;
     for (r, state) in plan.runs.iter().zip(&states) {
         if *state != RunState::New {
             check_unchanged(plan, r)?;
@@ -607,6 +616,45 @@ fn outcome(plan: &Plan, r: &PlannedRun, status: &str, wall_s: f64) -> RunOutcome
         status: status.into(),
         wall_s,
     }
+}
+
+/// Refuses an output folder that is no grid's, before anything is written in it: a
+/// checkpoint folder, or a non-empty folder holding neither a run folder of the grid's
+/// variants nor its `summary.md` (the repository root, a folder of other files), where
+/// the reports (`summary.md`, `runs.csv`, plots) would be written among the user's files.
+fn check_out_folder(plan: &Plan) -> Result<(), ExperimentError> {
+    let out = &plan.out;
+    let refuse = |why: String| {
+        Err(ExperimentError::NotAGridFolder {
+            dir: out.clone(),
+            why,
+        })
+    };
+    if out.join(crate::ppo::CHECKPOINT_FILE).exists() {
+        return refuse(format!(
+            "is a checkpoint folder (it holds {})",
+            crate::ppo::CHECKPOINT_FILE
+        ));
+    }
+    let Ok(entries) = std::fs::read_dir(out) else {
+        // Missing (created later) or unreadable (said when it is created).
+        return Ok(());
+    };
+    let mut names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    let ours = |n: &String| n == "summary.md" || plan.variants.iter().any(|v| &v.name == n);
+    if names.is_empty() || names.iter().any(ours) {
+        return Ok(());
+    }
+    names.sort();
+    let shown: Vec<&str> = names.iter().take(3).map(String::as_str).collect();
+    refuse(format!(
+        "is not empty and holds no runs or reports of this grid (it holds {}{})",
+        shown.join(", "),
+        if names.len() > 3 { ", ..." } else { "" }
+    ))
 }
 
 /// Keys of a run's config.toml that do not change how it trains: the threads and the
