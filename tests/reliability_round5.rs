@@ -365,6 +365,23 @@ fn a_recording_that_cannot_be_written_keeps_the_results() {
     assert_fails(&o, &["episodes could not be recorded", "the results above"]);
     assert!(stdout(&o).contains("mean success"), "{}", stdout(&o));
     assert!(rec.join("index.html").is_file());
+    // `rollout --record` likewise.
+    let rec = dir.path().join("rec2");
+    std::fs::create_dir_all(rec.join("baseline2_box_sugar_000.json")).unwrap();
+    let o = grasp(&[
+        "rollout",
+        "--policy",
+        "baseline2",
+        "--objects",
+        "box_sugar",
+        "--episodes",
+        "1",
+        "--record",
+        s(&rec),
+    ]);
+    assert_fails(&o, &["episodes could not be recorded", "the results above"]);
+    assert!(stdout(&o).contains("/1 successes"), "{}", stdout(&o));
+    assert!(rec.join("index.html").is_file());
 }
 
 /// SIGTERM during `grasp eval` lost everything: nothing printed, no CSV, no index.
