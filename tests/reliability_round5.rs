@@ -128,6 +128,26 @@ fn outputs_never_replace_inputs_or_each_other() {
     let o = eval(&["--csv", s(&index), "--record", s(&rec)]);
     assert_fails(&o, &["--csv", "inside the folder of --record"]);
     assert!(!rec.exists());
+    // A mesh of an --objects folder is an input too.
+    let set = d.join("set");
+    std::fs::create_dir(&set).unwrap();
+    let cube = set.join("cube.obj");
+    std::fs::copy(repo("tests/data/objects/cube.obj"), &cube).unwrap();
+    let o = grasp(&[
+        "eval",
+        "--policy",
+        "baseline2",
+        "--objects",
+        s(&set),
+        "--trials",
+        "1",
+        "--csv",
+        s(&cube),
+    ]);
+    assert_fails(&o, &["--csv", "--objects", "overwrite"]);
+    assert!(std::fs::read_to_string(&cube)
+        .unwrap()
+        .starts_with("# 5 cm cube"));
     // Other commands: the attempt log over the grasp file it reads.
     let g = d.join("g.toml");
     std::fs::copy(repo("tests/data/grasps/box_top_down.toml"), &g).unwrap();

@@ -58,10 +58,8 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
         if let Some(p) = &a.sim_config {
             inputs.push(Named::new("--sim-config", p));
         }
-        let object = std::path::Path::new(&a.object);
-        if object.is_file() {
-            inputs.push(Named::new("--object", object));
-        }
+        let objects = super::object_files(&a.object);
+        inputs.extend(objects.iter().map(|p| Named::new("--object", p)));
         check_outputs(&inputs, &[Named::new("--out", &a.out)], &[])?;
         // Checked before the presses: a calibration is not thrown away by its write.
         check_writable_file(&a.out)

@@ -509,10 +509,12 @@ fn check_overlaps(a: &EvalArgs) -> Result<()> {
             inputs.push(Named::new(flag, p));
         }
     }
-    let objects = Path::new(&a.objects);
-    if objects.is_file() {
-        inputs.push(Named::new("--objects", objects));
-    }
+    let objects = if a.from_json.is_empty() {
+        super::object_files(&a.objects)
+    } else {
+        Vec::new()
+    };
+    inputs.extend(objects.iter().map(|p| Named::new("--objects", p)));
     inputs.extend(ckpt.iter().map(|p| Named::new("the checkpoint file", p)));
     let mut outputs = Vec::new();
     if let Some(p) = &a.csv {

@@ -258,6 +258,8 @@ fn check_overlaps(a: &RunArgs) -> Result<()> {
             inputs.push(Named::new(flag, p));
         }
     }
+    let objects = super::object_files(&a.object);
+    inputs.extend(objects.iter().map(|p| Named::new("--object", p)));
     let mut outputs = vec![Named::new("--log", &a.log)];
     if let Some(p) = &a.save_cloud {
         outputs.push(Named::new("--save-cloud", p));
