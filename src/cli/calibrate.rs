@@ -67,10 +67,11 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
     }
     let report: CalibrationReport = match a.backend {
         Backend::Sim => {
-            if !(a.press_force.is_finite() && a.press_force > 0.0) {
+            // A fingertip press is a few newtons; 1000 N bounds any plausible one.
+            if !(a.press_force.is_finite() && a.press_force > 0.0 && a.press_force <= 1000.0) {
                 bail!(
-                    "--press-force must be a positive number of newtons, got {}",
-                    a.press_force
+                    "--press-force must be a number of newtons in (0, 1000], got {}",
+                    grasp::util::num::short(a.press_force)
                 );
             }
             let mut arm = sim_backend(
@@ -112,8 +113,11 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
 #[cfg(feature = "ros")]
 fn ros_calibrate(a: &CalibrateArgs) -> Result<CalibrationReport> {
     use grasp::hardware::HandArm;
-    if !(a.press_seconds.is_finite() && a.press_seconds > 0.0) {
-        bail!("--press-seconds must be positive, got {}", a.press_seconds);
+    if !(a.press_seconds.is_finite() && a.press_seconds > 0.0 && a.press_seconds <= 600.0) {
+        bail!(
+            "--press-seconds must be in (0, 600], got {}",
+            grasp::util::num::short(a.press_seconds)
+        );
     }
     let mut arm = super::run::connect_ros(&a.ros_url)?;
     let secs = a.press_seconds;

@@ -383,6 +383,11 @@ mod tests {
             TactileCalibration::new([0.0; 5], [1.0; 5], 0.0),
             Err(CalibrationError::BadFraction(_))
         ));
+        // Beyond any sensor's raw range: no contact would ever be detected.
+        let e = TactileCalibration::new([0.0; 5], [1e300, 1.0, 1.0, 1.0, 1.0], 0.003)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("upper[0] (FF)") && e.contains("1e300"), "{e}");
     }
 
     #[test]

@@ -115,6 +115,15 @@ pub enum TrainError {
         #[source]
         source: std::io::Error,
     },
+    /// A stale file could not be removed.
+    #[error("cannot remove {path}: {source}")]
+    Remove {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
     /// A file or folder could not be read.
     #[error("cannot read {path}: {source}")]
     Io {

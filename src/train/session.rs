@@ -115,7 +115,10 @@ fn discard_unfinished(dir: &Path) -> Result<(), TrainError> {
             || name == files::PLOT
             || (name.starts_with(files::EVENTS_PREFIX) && name.ends_with(files::EVENTS_SUFFIX));
         if stale && entry.path().is_file() {
-            std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
+            std::fs::remove_file(entry.path()).map_err(|source| TrainError::Remove {
+                path: entry.path(),
+                source,
+            })?;
         }
     }
     Ok(())
@@ -207,7 +210,7 @@ fn lock_run_dir(dir: &Path) -> Result<std::fs::File, TrainError> {
             );
             Ok(file)
         }
-        Err(std::fs::TryLockError::Error(source)) => Err(TrainError::Io { path, source }),
+        Err(std::fs::TryLockError::Error(source)) => Err(TrainError::Create { path, source }),
     }
 }
 
