@@ -254,6 +254,12 @@ fn network_and_rollout_sizes_are_bounded_together() {
             &["ppo.num_steps", "transitions per rollout", "GB"],
         ),
         ("[policy]\nembed_dim = 0\n", &["policy.embed_dim"]),
+        // A long history multiplies the observation: within the bound of a few hundred
+        // values, not of this one's.
+        (
+            "num_envs = 1024\n[ppo]\nnum_steps = 1024\nnum_minibatches = 4\n[env]\nhistory = 64\n",
+            &["ppo.num_steps", "transitions per rollout", "GB"],
+        ),
     ] {
         let cfg = dir.path().join("big.toml");
         std::fs::write(&cfg, format!("base = \"{}\"\n{extra}", s(&base))).unwrap();

@@ -537,6 +537,17 @@ impl TrainConfig {
                     format!("{} must be in 1..={max}", self.env.grasp.history),
                 );
             }
+            // The rollout buffers with this environment's observation width (a long
+            // history multiplies it).
+            let layout = crate::env::obs::ObsLayout::new(
+                self.env.grasp.modality,
+                self.n_components,
+                self.env.grasp.history.max(1),
+            );
+            let obs = layout.len() + crate::env::obs::CRITIC_STATE_LEN;
+            if let Err(m) = self.ppo_config().check_rollout_bytes(obs as u64) {
+                return bad("ppo.num_steps", m);
+            }
             if let Err((field, message)) = self.env.grasp.curriculum.validate() {
                 return bad(&format!("env.curriculum.{field}"), message);
             }
