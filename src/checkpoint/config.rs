@@ -256,10 +256,11 @@ fn load_chain(
     depth: usize,
     seen: &mut Vec<PathBuf>,
 ) -> Result<toml::Table, TrainConfigError> {
-    let src = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let src = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::CONFIG)
+        .map_err(|source| ConfigError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     if seen.contains(&canon) {
         return Err(TrainConfigError::Value {
@@ -479,13 +480,11 @@ impl TrainConfig {
                 format!("{} must be in 1..=10000", self.best_window),
             );
         }
-        if let Some(t) = self.time_budget_minutes {
-            if !(t.is_finite() && t > 0.0) {
-                return bad(
-                    "time_budget_minutes",
-                    format!("{} must be positive", crate::util::num::short(t)),
-                );
-            }
+        if let Some(Err(m)) = self
+            .time_budget_minutes
+            .map(crate::util::num::check_minutes)
+        {
+            return bad("time_budget_minutes", m);
         }
         if let Some(Err(m)) = self.threads.map(crate::util::threads::check) {
             return bad("threads", m);
@@ -538,6 +537,17 @@ impl TrainConfig {
                     format!("{} must be in 1..={max}", self.env.grasp.history),
                 );
             }
+            // The rollout buffers with this environment's observation width (a long
+            // history multiplies it).
+            let layout = crate::env::obs::ObsLayout::new(
+                self.env.grasp.modality,
+                self.n_components,
+                self.env.grasp.history.max(1),
+            );
+            let obs = layout.len() + crate::env::obs::CRITIC_STATE_LEN;
+            if let Err(m) = self.ppo_config().check_rollout_bytes(obs as u64) {
+                return bad("ppo.num_steps", m);
+            }
             if let Err((field, message)) = self.env.grasp.curriculum.validate() {
                 return bad(&format!("env.curriculum.{field}"), message);
             }
@@ -545,8 +555,24 @@ impl TrainConfig {
                 return bad("env", e.to_string());
             }
         }
-        if let Err(e) = self.ppo_config().validate() {
-            return bad("ppo", e.to_string());
+        // Each error under the table its key is set in: `[policy]` keys, top-level ones
+        // (`num_envs`, ...) and `[ppo]` ones.
+        match self.ppo_config().validate() {
+            Ok(()) => {}
+            Err(crate::ppo::PpoError::Policy(crate::policy::PolicyError::Config {
+                field,
+                message,
+            })) => return bad(&format!("policy.{field}"), message),
+            Err(crate::ppo::PpoError::Config { field, message }) => {
+                let top = field.split('/').all(|f| PPO_KEYS_ELSEWHERE.contains(&f));
+                let key = if top {
+                    field.to_string()
+                } else {
+                    format!("ppo.{field}")
+                };
+                return bad(&key, message);
+            }
+            Err(e) => return bad("ppo", e.to_string()),
         }
         Ok(())
     }

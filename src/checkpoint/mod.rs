@@ -59,10 +59,11 @@ pub fn saved_config(dir: &Path) -> Result<Option<TrainConfig>, CheckpointError> 
     if !path.is_file() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(&path).map_err(|e| CheckpointError {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
+    let text = crate::util::fsx::read_to_string_bounded(&path, crate::util::fsx::limits::CONFIG)
+        .map_err(|e| CheckpointError {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
     TrainConfig::parse(&path, &text)
         .map(Some)
         .map_err(|e| CheckpointError {

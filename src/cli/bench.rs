@@ -146,12 +146,13 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
     } else {
         let path = assets::default_or_given(&a.reference, REFERENCE, "--reference")
             .unwrap_or_else(|_| a.reference.clone());
-        let text = std::fs::read_to_string(&path).with_context(|| {
-            format!(
-                "reading the reference {} (create it with --update)",
-                path.display()
-            )
-        })?;
+        let text = grasp::util::fsx::read_to_string_bounded(&path, grasp::util::fsx::limits::DATA)
+            .with_context(|| {
+                format!(
+                    "reading the reference {} (create it with --update)",
+                    path.display()
+                )
+            })?;
         let r: Reference = serde_json::from_str(&text)
             .with_context(|| format!("parsing the reference {}", path.display()))?;
         Some(r)

@@ -52,12 +52,26 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
     if a.still < grasp::hardware::calibration::MIN_STILL_READINGS {
         bail!("--still must be at least 10 (Sec. V-C), got {}", a.still);
     }
+    {
+        use grasp::util::fsx::{check_outputs, check_writable_file, Named};
+        let mut inputs = Vec::new();
+        if let Some(p) = &a.sim_config {
+            inputs.push(Named::new("--sim-config", p));
+        }
+        let objects = super::object_files(&a.object);
+        inputs.extend(objects.iter().map(|p| Named::new("--object", p)));
+        check_outputs(&inputs, &[Named::new("--out", &a.out)], &[])?;
+        // Checked before the presses: a calibration is not thrown away by its write.
+        check_writable_file(&a.out)
+            .map_err(|e| anyhow::anyhow!("--out {}: {}", a.out.display(), e.source))?;
+    }
     let report: CalibrationReport = match a.backend {
         Backend::Sim => {
-            if !(a.press_force.is_finite() && a.press_force > 0.0) {
+            // A fingertip press is a few newtons; 1000 N bounds any plausible one.
+            if !(a.press_force.is_finite() && a.press_force > 0.0 && a.press_force <= 1000.0) {
                 bail!(
-                    "--press-force must be a positive number of newtons, got {}",
-                    a.press_force
+                    "--press-force must be a number of newtons in (0, 1000], got {}",
+                    grasp::util::num::short(a.press_force)
                 );
             }
             let mut arm = sim_backend(
@@ -99,8 +113,11 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
 #[cfg(feature = "ros")]
 fn ros_calibrate(a: &CalibrateArgs) -> Result<CalibrationReport> {
     use grasp::hardware::HandArm;
-    if !(a.press_seconds.is_finite() && a.press_seconds > 0.0) {
-        bail!("--press-seconds must be positive, got {}", a.press_seconds);
+    if !(a.press_seconds.is_finite() && a.press_seconds > 0.0 && a.press_seconds <= 600.0) {
+        bail!(
+            "--press-seconds must be in (0, 600], got {}",
+            grasp::util::num::short(a.press_seconds)
+        );
     }
     let mut arm = super::run::connect_ros(&a.ros_url)?;
     let secs = a.press_seconds;

@@ -12,7 +12,7 @@ use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::rank::MAX_RANK_TOP;
 use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
 use grasp::eval::{
-    csv_table, evaluate, markdown_table, paired_lines, paired_with_first, physics_line,
+    csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
     read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats, RankedPregrasp,
     TrialPlan,
 };
@@ -359,6 +359,7 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
         check_writable_file(p)
             .map_err(|e| anyhow::anyhow!("--csv {}: {}", p.display(), e.source))?;
     }
+    check_overlaps(&a)?;
     // `--labels "A, B"` names B, not " B".
     for l in &mut a.labels {
         *l = l.trim().to_string();
@@ -385,7 +386,16 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
             ),
         ),
     };
+    let interrupted = STOP.load(Ordering::SeqCst);
+    if interrupted && results.is_empty() {
+        eprintln!("interrupted (SIGINT or SIGTERM) before any trial finished: nothing to report");
+        std::process::exit(130);
+    }
     if !a.labels.is_empty() {
+        // Agents a signal kept from starting have no results (nor labels to take).
+        if interrupted {
+            a.labels.truncate(results.len());
+        }
         if a.labels.len() != results.len() {
             bail!(
                 "--labels names {} agents, but there are {}: {}",
@@ -414,6 +424,112 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
             eprintln!("wrote the per-object plot to {}", p.display());
         }
     }
+    if let (Some(dir), true) = (&a.rec.record, a.from_json.is_empty()) {
+        let entries: Vec<_> = results.iter().flat_map(|r| r.recordings.clone()).collect();
+        let index = write_index(dir, &entries)
+            .with_context(|| format!("writing the index of {}", dir.display()))?;
+        if !g.quiet {
+            eprintln!(
+                "recorded {} episodes: open {}",
+                entries.len(),
+                index.display()
+            );
+        }
+        let errors: Vec<&String> = results.iter().flat_map(|r| &r.record_errors).collect();
+        if let Some(first) = errors.first() {
+            bail!(
+                "--record {}: {} episodes could not be recorded (the results above are \
+                 complete): {first}",
+                dir.display(),
+                errors.len()
+            );
+        }
+    }
+    if interrupted {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        if !g.quiet {
+            eprintln!(
+                "interrupted (SIGINT or SIGTERM): the results above are of the trials that \
+                 finished"
+            );
+        }
+        // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
+        std::process::exit(130);
+    }
+    Ok(())
+}
+
+/// Set by SIGINT or SIGTERM during an evaluation: no trial starts after it, and the
+/// finished ones are printed and written (a second signal exits at once).
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Installs the SIGINT and SIGTERM handler of an evaluation ([`STOP`]).
+fn stop_on_signal(quiet: bool) -> Result<()> {
+    ctrlc::set_handler(move || {
+        if STOP.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        if !quiet {
+            eprintln!(
+                "\ninterrupted (SIGINT or SIGTERM): finishing the trials in progress, then \
+                 printing and writing the finished ones (again to quit at once)"
+            );
+        }
+    })
+    .context("installing the Ctrl-C and SIGTERM handler")
+}
+
+/// Refuses outputs that would overwrite an input (a `--from-json` file, a checkpoint's
+/// files, `--perturb`, ...) or each other (`--csv`, `--plot`, files inside `--record`).
+fn check_overlaps(a: &EvalArgs) -> Result<()> {
+    use grasp::util::fsx::{check_outputs, Named};
+    let dirs: Vec<PathBuf> = a
+        .policy
+        .iter()
+        .filter(|p| !matches!(p.as_str(), "baseline1" | "baseline2"))
+        .map(PathBuf::from)
+        .chain(a.ranker.iter().cloned())
+        .collect();
+    let ckpt: Vec<PathBuf> = dirs
+        .iter()
+        .flat_map(|d| super::checkpoint_files(d))
+        .collect();
+    let mut inputs: Vec<Named> = a
+        .from_json
+        .iter()
+        .map(|f| Named::new("--from-json", f))
+        .collect();
+    for (flag, p) in [
+        ("--perturb", &a.perturb),
+        ("--synergy", &a.synergy),
+        ("--sim-config", &a.sim_config),
+    ] {
+        if let Some(p) = p {
+            inputs.push(Named::new(flag, p));
+        }
+    }
+    let objects = if a.from_json.is_empty() {
+        super::object_files(&a.objects)
+    } else {
+        Vec::new()
+    };
+    inputs.extend(objects.iter().map(|p| Named::new("--objects", p)));
+    inputs.extend(ckpt.iter().map(|p| Named::new("the checkpoint file", p)));
+    let mut outputs = Vec::new();
+    if let Some(p) = &a.csv {
+        outputs.push(Named::new("--csv", p));
+    }
+    if let Some(p) = &a.plot {
+        outputs.push(Named::new("--plot", p));
+    }
+    let folders: Vec<Named> = a
+        .rec
+        .record
+        .iter()
+        .map(|d| Named::new("--record", d))
+        .collect();
+    check_outputs(&inputs, &outputs, &folders)?;
     Ok(())
 }
 
@@ -546,6 +662,7 @@ fn recording_names(
     a: &EvalArgs,
     agents: &[AgentEnv],
     record: Option<&RecordOptions>,
+    objects: &[String],
 ) -> Result<Vec<String>> {
     let rec_names: Vec<String> = agents
         .iter()
@@ -565,6 +682,12 @@ fn recording_names(
                 );
             }
         }
+        grasp::eval::record::check_file_names(&rec_names, objects).map_err(|e| {
+            anyhow::anyhow!(
+                "--record {}: {e}: name the agents apart with --labels",
+                r.dir.display()
+            )
+        })?;
     }
     Ok(rec_names)
 }
@@ -718,9 +841,10 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         only_failures: a.rec.record_failures,
         name: None,
     });
-    let rec_names = recording_names(a, &agents, record.as_ref())?;
+    let rec_names = recording_names(a, &agents, record.as_ref(), &names)?;
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?;
+    stop_on_signal(g.quiet)?;
     let mut results = Vec::new();
     for (i, ag) in agents.iter().enumerate() {
         let record = record.as_ref().map(|r| RecordOptions {
@@ -761,7 +885,10 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
                 a.trials
             );
         }
-        results.push(evaluate(
+        if STOP.load(Ordering::SeqCst) {
+            break;
+        }
+        results.push(evaluate_until(
             &names,
             &TrialPlan {
                 trials: a.trials,
@@ -772,7 +899,13 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             &make_env,
             &ag.spec,
             record.as_ref(),
+            Some(&STOP),
         )?);
+        if results.last().is_some_and(|r| r.objects.is_empty()) {
+            // Stopped by a signal before any of its trials finished.
+            results.pop();
+            break;
+        }
         if let Some(r) = results.last_mut() {
             r.conditions = conditions.clone();
         }
@@ -804,18 +937,6 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             }
         }
     }
-    if let Some(r) = &record {
-        let entries: Vec<_> = results.iter().flat_map(|r| r.recordings.clone()).collect();
-        let index = write_index(&r.dir, &entries)
-            .with_context(|| format!("writing the index of {}", r.dir.display()))?;
-        if !g.quiet {
-            eprintln!(
-                "recorded {} episodes: open {}",
-                entries.len(),
-                index.display()
-            );
-        }
-    }
     Ok(results)
 }
 
@@ -826,7 +947,18 @@ fn print_results(a: &EvalArgs, g: &Global, results: &[AgentResult]) -> Result<()
     let pairs = paired_lines(&paired_with_first(results)) + &unpaired_lines(results);
     let lift_lines: String = results.iter().map(lift_line).collect::<String>()
         + &results.iter().filter_map(retry_line).collect::<String>();
-    let physics_lines: String = results.iter().map(physics_line).collect();
+    let physics_lines: String = results.iter().map(physics_line).collect::<String>()
+        + &results
+            .iter()
+            .filter(|r| r.interrupted)
+            .map(|r| {
+                format!(
+                    "{}: interrupted (SIGINT or SIGTERM): only the trials that finished are \
+                     counted\n",
+                    r.agent
+                )
+            })
+            .collect::<String>();
     if g.json {
         println!("{}", serde_json::to_string_pretty(results)?);
     } else if a.markdown {

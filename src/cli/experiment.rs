@@ -46,13 +46,8 @@ pub struct ExperimentArgs {
 }
 
 pub fn run(a: ExperimentArgs, g: &Global) -> Result<()> {
-    if let Some(m) = a.budget_minutes {
-        if !(m.is_finite() && m > 0.0) {
-            bail!(
-                "--budget-minutes must be positive, got {}",
-                grasp::util::num::short(m)
-            );
-        }
+    if let Some(Err(m)) = a.budget_minutes.map(grasp::util::num::check_minutes) {
+        bail!("--budget-minutes {m}");
     }
     if a.parallel == Some(0) {
         bail!("--parallel must be at least 1");

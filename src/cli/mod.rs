@@ -74,6 +74,34 @@ impl RecordArgs {
     }
 }
 
+/// The files of the checkpoint folder `dir` that a command reads (weights, config.toml,
+/// synergy.json): no output may replace them.
+pub fn checkpoint_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    use grasp::checkpoint::files;
+    [grasp::ppo::CHECKPOINT_FILE, files::CONFIG, files::SYNERGY]
+        .map(|f| dir.join(f))
+        .to_vec()
+}
+
+/// The files an `--objects`-style argument reads: the manifest or mesh file it names and
+/// the mesh files of its objects (none for built-in sets and names): no output may
+/// replace them. An argument that does not resolve gives none (its error comes later).
+pub fn object_files(arg: &str) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    let p = std::path::Path::new(arg);
+    if p.is_file() {
+        files.push(p.to_path_buf());
+    }
+    if let Ok(specs) = grasp::objects::resolve_specs(arg) {
+        for s in specs {
+            if let grasp::objects::ShapeSpec::Mesh { path, .. } = s.spec.shape {
+                files.push(path);
+            }
+        }
+    }
+    files
+}
+
 /// Teach a Shadow hand on a UR10e arm to grasp unseen objects: hand synergies, a Rapier
 /// simulation with tactile and torque sensing, PPO with a GRU policy, evaluation, and
 /// execution on a real robot.

@@ -4,8 +4,10 @@ use super::Global;
 use anyhow::{bail, Context};
 use clap::{Args, Subcommand};
 use grasp::objects::sets::{self, BuildContext, ResolvedSpec};
+use grasp::objects::spec::ShapeSpec;
 use grasp::objects::stream;
 use grasp::objects::{HullSource, Object, ObjectError};
+use grasp::util::fsx::{check_outputs, Named};
 use std::path::{Path, PathBuf};
 
 /// Inspect the object library: built-in sets (`train`, `unseen`, `all`), the procedural
@@ -204,6 +206,19 @@ pub fn run(args: ObjectsArgs, global: &Global) -> anyhow::Result<()> {
         }
         ObjectsCmd::Export { name, out, set } => {
             let spec = find_spec(&name, &set)?;
+            if out.as_os_str() != "-" {
+                // The export never replaces the mesh (or manifest) it reads.
+                let mut inputs = Vec::new();
+                if let ShapeSpec::Mesh { path, .. } = &spec.spec.shape {
+                    inputs.push(Named::new("the object's mesh", path));
+                }
+                for (flag, p) in [("NAME", Path::new(&name)), ("--set", Path::new(&set))] {
+                    if p.is_file() {
+                        inputs.push(Named::new(flag, p));
+                    }
+                }
+                check_outputs(&inputs, &[Named::new("--out", &out)], &[])?;
+            }
             let prepared = sets::prepare(&spec)
                 .with_context(|| format!("cannot build object `{}`", spec.spec.name))?;
             let comment = format!(

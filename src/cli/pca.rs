@@ -9,7 +9,7 @@ use grasp::synergy::{draw, finger_limits, Dataset, LoadOptions, SynergyModel};
 use grasp::util::fsx::write_atomic;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::Global;
 
@@ -131,7 +131,23 @@ pub fn run(args: PcaArgs, g: &Global) -> Result<()> {
     }
 }
 
+/// Refuses an output (`flag`, `out`) that is one of `inputs` (flag, path) or that cannot
+/// be written.
+fn check_out(inputs: &[(&str, Option<&PathBuf>)], flag: &str, out: &Path) -> Result<()> {
+    use grasp::util::fsx::{check_outputs, Named};
+    let named: Vec<Named> = inputs
+        .iter()
+        .filter_map(|&(f, p)| p.map(|p| Named::new(f, p)))
+        .collect();
+    check_outputs(&named, &[Named::new(flag, out)], &[])?;
+    // Checked before the work: a collection is not thrown away by its write.
+    grasp::util::fsx::check_writable_file(out)
+        .map_err(|e| anyhow::anyhow!("{flag} {}: {}", out.display(), e.source))?;
+    Ok(())
+}
+
 fn collect(a: CollectArgs, g: &Global) -> Result<()> {
+    check_out(&[("--sim-config", a.sim_config.as_ref())], "--out", &a.out)?;
     let cfg = super::sim_config(a.sim_config.as_ref())?;
     let robot = Robot::builtin(a.hand);
     let opts = CollectOptions {
@@ -192,6 +208,9 @@ fn collect(a: CollectArgs, g: &Global) -> Result<()> {
 }
 
 fn show(a: ShowArgs, g: &Global) -> Result<()> {
+    if let Some(out) = &a.out {
+        check_out(&[("MODEL", Some(&a.model))], "--out", out)?;
+    }
     let model = SynergyModel::load(&a.model)?;
     let limits = finger_limits(a.hand);
     let rows = model.n_components().min(draw::FIGURE_COMPONENTS);
@@ -273,6 +292,7 @@ fn show(a: ShowArgs, g: &Global) -> Result<()> {
 }
 
 fn fit(a: FitArgs, g: &Global) -> Result<()> {
+    check_out(&[("DATASET", Some(&a.dataset))], "--out", &a.out)?;
     let n = usize::from(a.components);
     if !(a.tolerance.is_finite() && a.tolerance >= 0.0) {
         anyhow::bail!(

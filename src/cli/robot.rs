@@ -93,7 +93,7 @@ fn load_posture(spec: &str) -> Result<[f64; 24]> {
     if !path.exists() {
         bail!("unknown posture '{spec}': expected zero, open, c-shape or an existing file");
     }
-    let text = std::fs::read_to_string(&path)
+    let text = grasp::util::fsx::read_to_string_bounded(&path, grasp::util::fsx::limits::DATA)
         .with_context(|| format!("cannot read posture file {}", path.display()))?;
     parse_posture(&text, &path.display().to_string()).map_err(anyhow::Error::msg)
 }

@@ -12,6 +12,7 @@ use grasp::sim::ObjectSpec;
 use grasp::synergy::SynergyModel;
 use rayon::prelude::*;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use super::Global;
@@ -92,9 +93,19 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?.min(a.episodes);
     let start = Instant::now();
-    let mut done = run_episodes(&a, kind, seed, n_threads)?;
+    install_stop(g.quiet)?;
+    let record_errors = std::sync::Mutex::new(Vec::new());
+    let mut done = run_episodes(&a, kind, seed, n_threads, &record_errors)?;
     let wall = start.elapsed().as_secs_f64();
     done.sort_by_key(|d| d.0);
+    let interrupted = STOP.load(Ordering::SeqCst);
+    if interrupted && done.is_empty() {
+        eprintln!("interrupted (SIGINT or SIGTERM) before any episode finished: nothing to report");
+        std::process::exit(130);
+    }
+    // The episodes are printed before any file is written: a failed write loses nothing.
+    let all: Vec<(usize, EpisodeSummary)> = done.iter().map(|d| (d.0, d.1.clone())).collect();
+    report(&a, g, seed, &all, wall, n_threads)?;
     if let Some(dir) = &a.rec.record {
         let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
         let index = write_index(dir, &entries)
@@ -106,9 +117,48 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
                 index.display()
             );
         }
+        let errors = record_errors.into_inner().unwrap_or_default();
+        if let Some(first) = errors.first() {
+            bail!(
+                "--record {}: {} episodes could not be recorded (the results above are \
+                 complete): {first}",
+                dir.display(),
+                errors.len()
+            );
+        }
     }
-    let all: Vec<(usize, EpisodeSummary)> = done.into_iter().map(|d| (d.0, d.1)).collect();
-    report(&a, g, seed, &all, wall, n_threads)
+    if interrupted {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        if !g.quiet {
+            eprintln!(
+                "interrupted (SIGINT or SIGTERM): {} of {} episodes finished, printed above",
+                all.len(),
+                a.episodes
+            );
+        }
+        std::process::exit(130);
+    }
+    Ok(())
+}
+
+/// Set by SIGINT or SIGTERM during a rollout: no episode starts after it, and the
+/// finished ones are printed and recorded (a second signal exits at once).
+static STOP: AtomicBool = AtomicBool::new(false);
+
+fn install_stop(quiet: bool) -> Result<()> {
+    ctrlc::set_handler(move || {
+        if STOP.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        if !quiet {
+            eprintln!(
+                "\ninterrupted (SIGINT or SIGTERM): finishing the episodes in progress, then \
+                 printing them (again to quit at once)"
+            );
+        }
+    })
+    .context("installing the Ctrl-C and SIGTERM handler")
 }
 
 /// The agent of `--policy` (0: random, 1 and 2: the baselines), after checking the other
@@ -131,7 +181,13 @@ fn agent_kind(a: &RolloutArgs) -> Result<u8> {
 /// Runs (and with `--record`, records) every episode on `n_threads` threads. Episode i
 /// always runs the scene of seed (seed, i): outcomes do not depend on the number of
 /// threads.
-fn run_episodes(a: &RolloutArgs, kind: u8, seed: u64, n_threads: usize) -> Result<Vec<Done>> {
+fn run_episodes(
+    a: &RolloutArgs,
+    kind: u8,
+    seed: u64,
+    n_threads: usize,
+    record_errors: &std::sync::Mutex<Vec<String>>,
+) -> Result<Vec<Done>> {
     let robot = Robot::builtin(Side::Left);
     let model = load_synergy(a.synergy.as_ref(), a.components)?;
     let sim_cfg = super::sim_config(a.sim_config.as_ref())?;
@@ -164,6 +220,7 @@ fn run_episodes(a: &RolloutArgs, kind: u8, seed: u64, n_threads: usize) -> Resul
                 )?;
                 let n = model.n_components() + 2;
                 idx.iter()
+                    .take_while(|_| !STOP.load(Ordering::SeqCst))
                     .map(|&i| {
                         let s = grasp::env::api::episode_seed(seed, 0, i as u64);
                         if let Some(dir) = &a.rec.record {
@@ -186,10 +243,18 @@ fn run_episodes(a: &RolloutArgs, kind: u8, seed: u64, n_threads: usize) -> Resul
                             if a.rec.record_failures && !rec.summary.physics_failure {
                                 return Ok((i, rec.summary, None));
                             }
-                            let entry = write_recording(dir, &rec, i, 0).with_context(|| {
-                                format!("writing a recording into {}", dir.display())
-                            })?;
-                            return Ok((i, rec.summary, Some(entry)));
+                            // A recording that cannot be written (a full disk) does not
+                            // end the rollout: said after the episodes are printed.
+                            let entry = match write_recording(dir, &rec, i, 0) {
+                                Ok(e) => Some(e),
+                                Err(e) => {
+                                    if let Ok(mut v) = record_errors.lock() {
+                                        v.push(e.to_string());
+                                    }
+                                    None
+                                }
+                            };
+                            return Ok((i, rec.summary, entry));
                         }
                         let r = match kind {
                             0 => run_episode(&mut env, &mut RandomAgent::new(n, 0.15, s), s),

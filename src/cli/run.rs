@@ -208,9 +208,17 @@ fn given_source(a: &RunArgs) -> Result<Option<GraspSource>> {
     }
     if let (Some(c), Some(cl)) = (&a.center, &a.closing) {
         let v3 = |v: &Vec<f64>, name: &str| -> Result<[f64; 3]> {
-            v.as_slice()
-                .try_into()
-                .with_context(|| format!("--{name} takes three numbers x,y,z"))
+            match v.as_slice() {
+                &[x, y, z] => Ok([x, y, z]),
+                other => bail!(
+                    "--{name} takes three numbers x,y,z, got {}: {}",
+                    other.len(),
+                    v.iter()
+                        .map(|x| grasp::util::num::short(*x))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                ),
+            }
         };
         let f = GraspFile {
             center: v3(c, "center")?,
@@ -235,8 +243,36 @@ fn save_cloud(path: &Path, source: &GraspSource) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a `--log` or `--save-cloud` that is an input (the policy's files, `--grasp`,
+/// `--cloud`, `--calibration`, `--config`, `--sim-config`) or the other output.
+fn check_overlaps(a: &RunArgs) -> Result<()> {
+    use grasp::util::fsx::{check_outputs, Named};
+    let ckpt = super::checkpoint_files(&a.policy);
+    let mut inputs: Vec<Named> = ckpt.iter().map(|p| Named::new("--policy", p)).collect();
+    for (flag, p) in [
+        ("--grasp", &a.grasp),
+        ("--cloud", &a.cloud),
+        ("--calibration", &a.calibration),
+        ("--config", &a.config),
+        ("--sim-config", &a.sim_config),
+    ] {
+        if let Some(p) = p {
+            inputs.push(Named::new(flag, p));
+        }
+    }
+    let objects = super::object_files(&a.object);
+    inputs.extend(objects.iter().map(|p| Named::new("--object", p)));
+    let mut outputs = vec![Named::new("--log", &a.log)];
+    if let Some(p) = &a.save_cloud {
+        outputs.push(Named::new("--save-cloud", p));
+    }
+    check_outputs(&inputs, &outputs, &[])?;
+    Ok(())
+}
+
 pub fn run(a: RunArgs, g: &Global) -> Result<()> {
     super::check_attempts(a.attempts, "grasp attempts on the object")?;
+    check_overlaps(&a)?;
     let seed = g.seed.unwrap_or(0);
     let robot = Robot::builtin(Side::Left);
     let policy_dir = assets::default_or_given(&a.policy, grasp::run::DEFAULT_POLICY, "--policy")?;
@@ -247,6 +283,9 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
         None => None,
     };
     let source = given_source(&a)?;
+    if let Some(s) = &source {
+        grasp::run::plan::check_source(s)?;
+    }
     match a.backend {
         Backend::Sim => {
             let sim_cfg = sim_config(a.sim_config.as_ref())?;

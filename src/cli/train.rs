@@ -71,12 +71,8 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
         cfg.num_envs = n;
     }
     if let Some(m) = a.time_budget_minutes {
-        if !(m.is_finite() && m > 0.0) {
-            bail!(
-                "--time-budget-minutes {} must be a positive number of minutes (it overrides \
-                 the config's time_budget_minutes)",
-                grasp::util::num::short(m)
-            );
+        if let Err(e) = grasp::util::num::check_minutes(m) {
+            bail!("--time-budget-minutes {e} (it overrides the config's time_budget_minutes)");
         }
         cfg.time_budget_minutes = Some(m);
     }

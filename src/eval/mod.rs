@@ -104,6 +104,23 @@ pub fn evaluate(
     spec: &AgentSpec,
     record: Option<&RecordOptions>,
 ) -> Result<AgentResult, EvalError> {
+    evaluate_until(names, plan, threads, make_env, spec, record, None)
+}
+
+/// [`evaluate`] that stops starting trials once `stop` is set (a signal): the trials in
+/// progress finish, the result holds the finished trials of the objects that have any
+/// and is marked `interrupted`. A recording that cannot be written (a full disk) does not
+/// stop the evaluation: its error is kept in `record_errors`.
+pub fn evaluate_until(
+    names: &[String],
+    plan: &TrialPlan,
+    threads: usize,
+    make_env: &(dyn Fn(usize) -> Result<GraspEnv, GraspEnvError> + Sync),
+    spec: &AgentSpec,
+    record: Option<&RecordOptions>,
+    stop: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<AgentResult, EvalError> {
+    let stopped = || stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
     let TrialPlan {
         trials,
         seed,
@@ -123,6 +140,9 @@ pub fn evaluate(
         (0..names.len())
             .into_par_iter()
             .map(|o| -> Result<Vec<TrialOutcome>, EvalError> {
+                if stopped() {
+                    return Ok(Vec::new());
+                }
                 let mut env = make_env(o)?;
                 let mut agent: Option<PolicyAgent> = match spec.checkpoint() {
                     Some(dir) => Some(PolicyAgent::new(
@@ -140,24 +160,39 @@ pub fn evaluate(
                     (_, Some(a)) => Actor::Policy(a),
                     (_, None) => unreachable!("a checkpoint agent is built above"),
                 };
-                (0..trials)
-                    .map(|t| {
-                        let s = trial_seed(seed, &names[o], t);
-                        let rec = record.map(|r| (r, rec_label.as_str()));
-                        run_trial(&mut env, &mut actor, (s, t, attempts), rec)
-                    })
-                    .collect()
+                let mut done = Vec::with_capacity(trials);
+                for t in 0..trials {
+                    if stopped() {
+                        break;
+                    }
+                    let s = trial_seed(seed, &names[o], t);
+                    let rec = record.map(|r| (r, rec_label.as_str()));
+                    done.push(run_trial(&mut env, &mut actor, (s, t, attempts), rec)?);
+                }
+                Ok(done)
             })
             .collect::<Result<Vec<_>, _>>()
     })?;
     let wall_s = start.elapsed().as_secs_f64();
+    let interrupted = per_object.iter().any(|t| t.len() < trials);
+    // An object none of whose trials finished is left out (no rate to give).
+    let (names, per_object): (Vec<&String>, Vec<Vec<TrialOutcome>>) = names
+        .iter()
+        .zip(per_object)
+        .filter(|(_, t)| !t.is_empty())
+        .unzip();
+    let record_errors: Vec<String> = per_object
+        .iter()
+        .flatten()
+        .flat_map(|t| t.record_errors.iter().cloned())
+        .collect();
     let mut objects = Vec::new();
     let mut recordings = Vec::new();
     let lifts = LiftStats::of(per_object.iter().flatten().map(|t| &t.summary));
     let retries = (attempts > 1)
         .then(|| RetryStats::of(attempts, &per_object.iter().flatten().collect::<Vec<_>>()));
     let (mut k_all, mut n_all, mut steps_all) = (0, 0, 0usize);
-    for (name, trials) in names.iter().zip(per_object) {
+    for (name, trials) in names.into_iter().zip(per_object) {
         let eps: Vec<&EpisodeSummary> = trials.iter().map(|t| &t.summary).collect();
         let k = eps.iter().filter(|e| e.success).count();
         let n = eps.len();
@@ -232,6 +267,8 @@ pub fn evaluate(
         seed: Some(seed),
         objects,
         recordings,
+        interrupted,
+        record_errors,
     })
 }
 

@@ -369,6 +369,8 @@ fn pool_agent(name: &str, list: &[(&Path, &AgentResult)]) -> AgentResult {
         retries,
         conditions: first.conditions.clone(),
         recordings: Vec::new(),
+        interrupted: list.iter().any(|(_, r)| r.interrupted),
+        record_errors: Vec::new(),
         objects,
     }
 }

@@ -284,9 +284,11 @@ pub fn record_baseline_episode(
 }
 
 /// `s` reduced to file-name-safe characters (letters, digits, `-`, `_`, `.`; others
-/// become `_`), at most 80 characters.
+/// become `_`), at most 80 characters: a longer name keeps its first 71 and ends in `-`
+/// and 8 hex digits of a hash of the whole name, so two long names sharing their first 80
+/// characters are still told apart.
 pub fn slug(s: &str) -> String {
-    let t: String = s
+    let t: Vec<char> = s
         .chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
@@ -295,8 +297,15 @@ pub fn slug(s: &str) -> String {
                 '_'
             }
         })
-        .take(80)
         .collect();
+    let t: String = if t.len() > 80 {
+        let mut h = crate::util::hash::Fnv128::new();
+        h.write(s.as_bytes());
+        let head: String = t[..71].iter().collect();
+        format!("{head}-{:08x}", h.finish() as u32)
+    } else {
+        t.into_iter().collect()
+    };
     let t = t.trim_matches('.').to_string();
     if t.is_empty() {
         "episode".into()
@@ -409,6 +418,29 @@ pub fn agent_file_name(agent: &str) -> String {
     }
 }
 
+/// Checks, before any episode, that the recordings of every agent (`agents`: the names
+/// the recordings take) on every object get their own files: the file stem
+/// `<agent>_<object>` of [`write_recording`] can be shared by two pairs (agent `P_box` on
+/// `sugar`, agent `P` on `box_sugar`), and one would overwrite the other. `Err` names both
+/// pairs and the shared stem.
+pub fn check_file_names(agents: &[String], objects: &[String]) -> Result<(), String> {
+    let mut seen: std::collections::HashMap<String, (&str, &str)> = Default::default();
+    for a in agents {
+        for o in objects {
+            let stem = format!("{}_{}", agent_file_name(a), slug(o));
+            if let Some((a0, o0)) = seen.insert(stem.clone(), (a, o)) {
+                if (a0, o0) != (a.as_str(), o.as_str()) {
+                    return Err(format!(
+                        "agent '{a0}' on object '{o0}' and agent '{a}' on object '{o}' would \
+                         both be recorded as '{stem}_<trial>', one overwriting the other"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Writes `rec` as `<stem>.json` and `<stem>.html` into `dir` (atomically, the folder
 /// created when missing), where the stem is `<agent>_<object>_<trial>` made file-safe,
 /// the agent as [`agent_file_name`] gives it, and `_attempt<k>` added for a trial's
@@ -419,7 +451,7 @@ pub fn write_recording(
     trial: usize,
     attempt: usize,
 ) -> Result<RecordingEntry, RecordError> {
-    std::fs::create_dir_all(dir).map_err(|source| RecordError::Dir {
+    crate::util::fsx::create_dirs(dir).map_err(|source| RecordError::Dir {
         path: dir.to_path_buf(),
         source,
     })?;
@@ -634,5 +666,24 @@ mod tests {
         let idx = write_index(dir.path(), &[entry]).unwrap();
         let text = std::fs::read_to_string(idx).unwrap();
         assert!(text.contains("Baseline_1_box_002.html"));
+    }
+
+    #[test]
+    fn long_names_stay_apart_and_shared_stems_are_found() {
+        let a = format!("{}{}", "o".repeat(100), "a".repeat(21));
+        let b = format!("{}{}", "o".repeat(100), "b".repeat(21));
+        let (sa, sb) = (slug(&a), slug(&b));
+        assert_ne!(sa, sb);
+        assert_eq!(sa.len(), 80);
+        assert_eq!(slug("box_sugar"), "box_sugar");
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let e =
+            check_file_names(&names(&["P_box", "P"]), &names(&["box_sugar", "sugar"])).unwrap_err();
+        assert!(
+            e.contains("'P_box' on object 'sugar'") && e.contains("'P' on object 'box_sugar'"),
+            "{e}"
+        );
+        check_file_names(&names(&["A", "B"]), &names(&["box_sugar", "sugar"])).unwrap();
+        check_file_names(&names(&["P"]), &[a, b]).unwrap();
     }
 }

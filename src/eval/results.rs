@@ -182,6 +182,17 @@ pub struct AgentResult {
     /// Episodes recorded (with `record`), per object then trial.
     #[serde(skip_serializing_if = "Vec::is_empty", skip_deserializing)]
     pub recordings: Vec<RecordingEntry>,
+    /// Whether a signal (SIGINT, SIGTERM) stopped the evaluation before all its trials:
+    /// the objects and trials are those that finished.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub interrupted: bool,
+    /// Recordings that could not be written (with `record`), one error each; not saved.
+    #[serde(skip)]
+    pub record_errors: Vec<String>,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 impl AgentResult {
@@ -399,7 +410,8 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         path: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+    let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::DATA)
+        .map_err(|e| bad(e.to_string()))?;
     let mut results: Vec<AgentResult> = serde_json::from_str(&text).map_err(|e| {
         bad(format!(
             "not the JSON of `grasp eval --json` (a list of agents' results): {e}"
@@ -447,6 +459,7 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         check_retries(r).map_err(bad)?;
         let k_all: usize = r.objects.iter().map(|o| o.successes).sum();
         let n_all: usize = r.objects.iter().map(|o| o.trials).sum();
+        check_counts(r, n_all).map_err(bad)?;
         r.mean_rate = r.objects.iter().map(|o| o.rate).sum::<f64>() / r.objects.len().max(1) as f64;
         r.ci95 = wilson(k_all, n_all);
         r.over_1cm_by_body = over_1cm_by_body(&r.objects);
@@ -470,6 +483,79 @@ pub fn read_results(path: &Path) -> Result<Vec<AgentResult>, EvalError> {
         }
     }
     Ok(results)
+}
+
+/// Checks that `r`'s rates are rates (in [0, 1]) and its counts fit its `n_all` trials
+/// (an edited `thumb_contact_rate: 7.0` printed 700.0 %, `physics_failures: 99` of 2
+/// trials was shown as it was).
+fn check_counts(r: &AgentResult, n_all: usize) -> Result<(), String> {
+    let agent = &r.agent;
+    let l = &r.lifts;
+    if !(0.0..=1.0).contains(&l.thumb_contact_rate) {
+        return Err(format!(
+            "agent '{agent}': `lifts.thumb_contact_rate` {} must be a rate in [0, 1]",
+            crate::util::num::short(l.thumb_contact_rate)
+        ));
+    }
+    for (field, v) in [
+        ("lifts.mean_grip_effort", l.mean_grip_effort),
+        ("lifts.mean_grip_held", l.mean_grip_held),
+        ("lifts.mean_grip_dropped", l.mean_grip_dropped),
+    ] {
+        if !v.is_finite() {
+            return Err(format!("agent '{agent}': `{field}` is not a finite number"));
+        }
+    }
+    for (field, v) in [
+        ("mean_steps", r.mean_steps),
+        ("control_steps_per_s", r.control_steps_per_s),
+        ("wall_s", r.wall_s),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "agent '{agent}': `{field}` {} must be a finite number >= 0",
+                crate::util::num::short(v)
+            ));
+        }
+    }
+    if let Some(p) = &r.pregrasp {
+        let episodes = n_all.saturating_mul(r.attempts().max(1));
+        if p.planned.saturating_add(p.default_placement) > episodes {
+            return Err(format!(
+                "agent '{agent}': `pregrasp` places {} + {} episodes, more than its {n_all} \
+                 trials of {} attempts",
+                p.planned,
+                p.default_placement,
+                r.attempts().max(1)
+            ));
+        }
+    }
+    for (field, n) in [
+        ("physics_failures", r.physics_failures),
+        ("lifts.lifted", l.lifted),
+        (
+            "lifts.failed_in_hand + lifts.failed_out_of_hand",
+            l.failed_in_hand.saturating_add(l.failed_out_of_hand),
+        ),
+    ] {
+        if n > n_all {
+            return Err(format!(
+                "agent '{agent}': `{field}` is {n}, more than its {n_all} trials"
+            ));
+        }
+    }
+    for o in &r.objects {
+        if o.physics_failures > o.trials
+            || o.failed_in_hand.saturating_add(o.failed_out_of_hand) > o.trials
+        {
+            return Err(format!(
+                "agent '{agent}', object '{}': more physics failures or failed lifts than \
+                 its {} trials",
+                o.object, o.trials
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Checks `r`'s attempts per trial against its `retries` and recomputes the counts of
@@ -689,6 +775,8 @@ mod tests {
             retries: None,
             seed: None,
             recordings: Vec::new(),
+            interrupted: false,
+            record_errors: Vec::new(),
         };
         assert_eq!(over_1cm_by_body(&r.objects), r.over_1cm_by_body);
         let line = physics_line(&r);
@@ -700,6 +788,28 @@ mod tests {
         };
         write(std::slice::from_ref(&r));
         assert_eq!(read_results(&path).unwrap(), vec![r.clone()]);
+        // Rates are rates, counts fit the trials.
+        for edit in [
+            (|x: &mut AgentResult| x.lifts.thumb_contact_rate = 7.0) as fn(&mut AgentResult),
+            |x| x.physics_failures = 99,
+            |x| x.lifts.lifted = 5,
+            |x| x.objects[0].physics_failures = 5,
+            |x| x.control_steps_per_s = -1.0,
+            |x| {
+                x.pregrasp = Some(PregraspStats {
+                    placement: "antipodal".into(),
+                    planned: 4,
+                    default_placement: 1,
+                    ranked: None,
+                })
+            },
+        ] {
+            let mut bad = r.clone();
+            edit(&mut bad);
+            write(&[bad]);
+            let e = read_results(&path).unwrap_err().to_string();
+            assert!(e.contains("eval.json") && e.contains("Baseline 2"), "{e}");
+        }
         // Saved before the bodies were recorded: counted as unknown.
         let mut legacy = r.clone();
         legacy.objects[0].deepest_contacts_with.clear();

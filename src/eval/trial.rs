@@ -90,6 +90,9 @@ pub struct TrialOutcome {
     pub stopped: Option<NoRetry>,
     /// The attempts' recordings, when recording.
     pub recordings: Vec<RecordingEntry>,
+    /// Recordings that could not be written (a full disk): the evaluation goes on, and
+    /// the caller reports them after the results.
+    pub record_errors: Vec<String>,
 }
 
 /// `first` followed by `next`: `next`'s summary with both attempts' steps and returns
@@ -128,6 +131,7 @@ pub fn run_trial(
     record: Option<(&RecordOptions, &str)>,
 ) -> Result<TrialOutcome, EvalError> {
     let mut out: Option<TrialOutcome> = None;
+    let mut record_errors = Vec::new();
     for k in 0..attempts.max(1) {
         if let Some(o) = out.as_mut() {
             if o.summary.success {
@@ -149,7 +153,13 @@ pub fn run_trial(
                 };
                 let keep = !r.only_failures || rec.summary.physics_failure;
                 let entry = if keep {
-                    Some(record::write_recording(&r.dir, &rec, trial, k)?)
+                    match record::write_recording(&r.dir, &rec, trial, k) {
+                        Ok(e) => Some(e),
+                        Err(e) => {
+                            record_errors.push(e.to_string());
+                            None
+                        }
+                    }
                 } else {
                     None
                 };
@@ -170,6 +180,7 @@ pub fn run_trial(
                     attempts: 1,
                     stopped: None,
                     recordings: entry.into_iter().collect(),
+                    record_errors: Vec::new(),
                 })
             }
             Some(o) => {
@@ -179,7 +190,9 @@ pub fn run_trial(
             }
         }
     }
-    Ok(out.unwrap_or_else(|| unreachable!("at least one attempt runs")))
+    let mut out = out.unwrap_or_else(|| unreachable!("at least one attempt runs"));
+    out.record_errors = record_errors;
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -232,6 +245,7 @@ mod tests {
             attempts,
             stopped,
             recordings: Vec::new(),
+            record_errors: Vec::new(),
         };
         let trials = [
             t(true, 1, None),

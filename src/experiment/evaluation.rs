@@ -216,7 +216,11 @@ pub fn cached_eval(
     let Ok(RunState::Done(rec)) = run_state(&r.dir) else {
         return None;
     };
-    let text = std::fs::read_to_string(eval_file(&r.dir, k, objects)).ok()?;
+    let text = crate::util::fsx::read_to_string_bounded(
+        &eval_file(&r.dir, k, objects),
+        crate::util::fsx::limits::DATA,
+    )
+    .ok()?;
     let c: RunEval = serde_json::from_str(&text).ok()?;
     c.matches(e, objects, conditions, rec.transitions, c.seed)
         .then_some(c)
@@ -249,9 +253,10 @@ pub fn evaluate_runs(
                 continue;
             };
             let cache = eval_file(&r.dir, k, set);
-            let cached = std::fs::read_to_string(&cache)
-                .ok()
-                .and_then(|t| serde_json::from_str::<RunEval>(&t).ok());
+            let cached =
+                crate::util::fsx::read_to_string_bounded(&cache, crate::util::fsx::limits::DATA)
+                    .ok()
+                    .and_then(|t| serde_json::from_str::<RunEval>(&t).ok());
             if cached.is_some_and(|c| c.matches(e, set, &conditions, rec.transitions, seed)) {
                 continue;
             }

@@ -174,6 +174,26 @@ pub enum ExperimentError {
         /// The output folder.
         dir: PathBuf,
     },
+    /// The output folder is no grid's (a checkpoint folder, a folder of other files).
+    #[error("--out {dir} {why}: run the grid into a new folder")]
+    NotAGridFolder {
+        /// The folder.
+        dir: PathBuf,
+        /// What it is instead.
+        why: String,
+    },
+    /// `--resume` of a grid whose edits change how its runs are trained.
+    #[error(
+        "cannot resume {dir}: the grid now trains it differently from how it was trained \
+         (its config.toml differs in {keys}); restore the grid's settings, or run the \
+         edited grid into another --out"
+    )]
+    Changed {
+        /// The run folder.
+        dir: PathBuf,
+        /// The differing keys.
+        keys: String,
+    },
     /// A file could not be read or written.
     #[error("{path}: {message}")]
     Io {
@@ -295,10 +315,8 @@ impl GridConfig {
         if self.budget.transitions == Some(0) {
             return bad("budget.transitions", "must be at least 1".into());
         }
-        if let Some(m) = self.budget.minutes {
-            if !(m.is_finite() && m > 0.0) {
-                return bad("budget.minutes", format!("{m} must be positive"));
-            }
+        if let Some(Err(m)) = self.budget.minutes.map(crate::util::num::check_minutes) {
+            return bad("budget.minutes", m);
         }
         if let Some(Err((field, message))) = self.eval.as_ref().map(EvalSettings::validate) {
             return bad(field, message);
@@ -478,7 +496,8 @@ pub enum RunState {
 pub fn run_state(dir: &Path) -> Result<RunState, ExperimentError> {
     let done = dir.join(DONE_FILE);
     if done.is_file() {
-        let text = std::fs::read_to_string(&done).map_err(|e| io_err(&done, e))?;
+        let text = crate::util::fsx::read_to_string_bounded(&done, crate::util::fsx::limits::DATA)
+            .map_err(|e| io_err(&done, e))?;
         let r: RunRecord = serde_json::from_str(&text).map_err(|e| io_err(&done, e))?;
         return Ok(RunState::Done(r));
     }
@@ -536,12 +555,19 @@ pub fn run_grid(
             dir: plan.out.clone(),
         });
     }
-    std::fs::create_dir_all(&plan.out).map_err(|e| io_err(&plan.out, e))?;
+    check_out_folder(plan)?;
+    for (r, state) in plan.runs.iter().zip(&states) {
+        if *state != RunState::New {
+            check_unchanged(plan, r)?;
+        }
+    }
+    crate::util::fsx::create_dirs(&plan.out).map_err(|e| io_err(&plan.out, e))?;
     let parallel = opts.parallel.unwrap_or(plan.grid.parallel).max(1);
     let threads = (opts.threads / parallel).max(1);
     let deadline = opts
         .budget_minutes
-        .map(|m| Instant::now() + std::time::Duration::from_secs_f64(m * 60.0));
+        .and_then(|m| std::time::Duration::try_from_secs_f64(m * 60.0).ok())
+        .and_then(|d| Instant::now().checked_add(d));
     let queue: Mutex<VecDeque<usize>> = Mutex::new((0..plan.runs.len()).collect());
     let results: Mutex<Vec<(usize, RunOutcome)>> = Mutex::new(Vec::new());
     let first_error: Mutex<Option<ExperimentError>> = Mutex::new(None);
@@ -589,6 +615,96 @@ fn outcome(plan: &Plan, r: &PlannedRun, status: &str, wall_s: f64) -> RunOutcome
         dir: r.dir.clone(),
         status: status.into(),
         wall_s,
+    }
+}
+
+/// Refuses an output folder that is no grid's, before anything is written in it: a
+/// checkpoint folder, or a non-empty folder holding neither a run folder of the grid's
+/// variants nor its `summary.md` (the repository root, a folder of other files), where
+/// the reports (`summary.md`, `runs.csv`, plots) would be written among the user's files.
+fn check_out_folder(plan: &Plan) -> Result<(), ExperimentError> {
+    let out = &plan.out;
+    let refuse = |why: String| {
+        Err(ExperimentError::NotAGridFolder {
+            dir: out.clone(),
+            why,
+        })
+    };
+    if out.join(crate::ppo::CHECKPOINT_FILE).exists() {
+        return refuse(format!(
+            "is a checkpoint folder (it holds {})",
+            crate::ppo::CHECKPOINT_FILE
+        ));
+    }
+    let Ok(entries) = std::fs::read_dir(out) else {
+        // Missing (created later) or unreadable (said when it is created).
+        return Ok(());
+    };
+    let mut names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    let ours = |n: &String| n == "summary.md" || plan.variants.iter().any(|v| &v.name == n);
+    if names.is_empty() || names.iter().any(ours) {
+        return Ok(());
+    }
+    names.sort();
+    let shown: Vec<&str> = names.iter().take(3).map(String::as_str).collect();
+    refuse(format!(
+        "is not empty and holds no runs or reports of this grid (it holds {}{})",
+        shown.join(", "),
+        if names.len() > 3 { ", ..." } else { "" }
+    ))
+}
+
+/// Keys of a run's config.toml that do not change how it trains: the threads and the
+/// minutes left are set anew on every resume.
+const RESUME_FREE_KEYS: [&str; 2] = ["threads", "time_budget_minutes"];
+
+/// Refuses to continue (or count) run `r` when the grid now plans it with other
+/// training settings than its saved config.toml holds (objects, transitions, PPO sizes,
+/// the environment, ...): finished and resumed runs trained differently would be pooled
+/// into one mean. Names the differing keys.
+fn check_unchanged(plan: &Plan, r: &PlannedRun) -> Result<(), ExperimentError> {
+    let path = r.dir.join(files::CONFIG);
+    let Ok(text) =
+        crate::util::fsx::read_to_string_bounded(&path, crate::util::fsx::limits::CONFIG)
+    else {
+        // A run without its config.toml is refused by training itself.
+        return Ok(());
+    };
+    let saved: toml::Table = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
+    let mut cfg = plan.variants[r.variant].config.clone();
+    cfg.seed = r.seed;
+    let planned_text = cfg.to_toml_string().map_err(|e| io_err(&path, e))?;
+    let planned: toml::Table = toml::from_str(&planned_text).map_err(|e| io_err(&path, e))?;
+    let mut keys = Vec::new();
+    diff_tables(&saved, &planned, "", &mut keys);
+    keys.retain(|k| !RESUME_FREE_KEYS.contains(&k.as_str()));
+    if keys.is_empty() {
+        return Ok(());
+    }
+    Err(ExperimentError::Changed {
+        dir: r.dir.clone(),
+        keys: keys.join(", "),
+    })
+}
+
+/// The dotted keys whose values differ between `a` and `b` (present in one only
+/// included), sorted.
+fn diff_tables(a: &toml::Table, b: &toml::Table, prefix: &str, out: &mut Vec<String>) {
+    let mut names: Vec<&String> = a.keys().chain(b.keys()).collect();
+    names.sort();
+    names.dedup();
+    for k in names {
+        let key = format!("{prefix}{k}");
+        match (a.get(k), b.get(k)) {
+            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                diff_tables(x, y, &format!("{key}."), out)
+            }
+            (x, y) if x != y => out.push(key),
+            _ => {}
+        }
     }
 }
 
@@ -739,6 +855,55 @@ mod tests {
         let p = dir.join("grid.toml");
         std::fs::write(&p, text).unwrap();
         p
+    }
+
+    #[test]
+    fn resume_refuses_a_grid_that_trains_existing_runs_differently() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let p = write_grid(dir.path(), &grid_text("[budget]\ntransitions = 640\n"));
+        let first = plan(&p, &out).unwrap();
+        // A finished run, saved as the grid then planned it (threads and the minutes
+        // left are set anew on every resume).
+        let r = &first.runs[0];
+        let mut cfg = first.variants[r.variant].config.clone();
+        cfg.seed = r.seed;
+        cfg.threads = Some(3);
+        std::fs::create_dir_all(&r.dir).unwrap();
+        std::fs::write(r.dir.join(files::CONFIG), cfg.to_toml_string().unwrap()).unwrap();
+        let record = RunRecord {
+            variant: first.variants[r.variant].name.clone(),
+            seed: r.seed,
+            updates: 1,
+            transitions: 640,
+            episodes: 1,
+            wall_s: 1.0,
+            stop: "completed".into(),
+        };
+        std::fs::write(
+            r.dir.join(DONE_FILE),
+            serde_json::to_string(&record).unwrap(),
+        )
+        .unwrap();
+        check_unchanged(&first, r).unwrap();
+        // The grid edited: other transitions and objects.
+        let p = write_grid(
+            dir.path(),
+            &grid_text("[budget]\ntransitions = 1280\n[overrides]\nobjects = \"box_sugar\"\n"),
+        );
+        let edited = plan(&p, &out).unwrap();
+        let opts = GridOptions {
+            budget_minutes: None,
+            resume: true,
+            threads: 1,
+            parallel: None,
+        };
+        let e = run_grid(&edited, &opts, &|_| {}).unwrap_err().to_string();
+        assert!(
+            e.contains("cannot resume") && e.contains("objects, total_timesteps"),
+            "{e}"
+        );
+        assert!(!edited.runs[1].dir.exists(), "nothing was trained");
     }
 
     #[test]

@@ -247,7 +247,7 @@ pub fn markdown(plan: &Plan, s: &GridSummary) -> String {
 /// plan's output folder; returns the summary with the plots' paths.
 pub fn write_reports(plan: &Plan) -> Result<GridSummary, ExperimentError> {
     let (mut s, curves) = summarize(plan)?;
-    std::fs::create_dir_all(&plan.out).map_err(|e| io_err(&plan.out, e))?;
+    crate::util::fsx::create_dirs(&plan.out).map_err(|e| io_err(&plan.out, e))?;
     for (a, members) in plan.grid.ablation.iter().zip(&plan.ablations) {
         let bands: Vec<_> = members
             .iter()

@@ -44,6 +44,18 @@ pub enum CalibrationError {
         /// The value.
         value: f64,
     },
+    /// A value beyond any sensor's raw range ([`MAX_RAW`]).
+    #[error(
+        "{field}: value {} is beyond any fingertip sensor's raw reading (at most {MAX_RAW} in \
+         magnitude); with it no contact would ever be detected",
+        crate::util::num::short(*value)
+    )]
+    OutOfRange {
+        /// The field, e.g. `upper[2] (RF)`.
+        field: String,
+        /// The value.
+        value: f64,
+    },
     /// The upper range is not above the lower range.
     #[error("fingertip {finger}: upper range {upper} must be greater than lower range {lower}")]
     EmptyRange {
@@ -82,6 +94,11 @@ pub enum CalibrationError {
     Write(#[from] crate::util::fsx::WriteError),
 }
 
+/// The largest magnitude of a raw fingertip reading a calibration may hold: far above the
+/// sensors' range (the simulated ones read a few hundred to a few thousand, 16-bit ADCs
+/// at most 65,535).
+pub const MAX_RAW: f64 = 1e6;
+
 /// A tactile calibration: per-fingertip lower and upper ranges and the contact threshold.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -117,6 +134,12 @@ impl TactileCalibration {
             for (name, v) in [("lower", self.lower[k]), ("upper", self.upper[k])] {
                 if !v.is_finite() {
                     return Err(CalibrationError::NonFinite {
+                        field: format!("{name}[{k}] ({finger})"),
+                        value: v,
+                    });
+                }
+                if v.abs() > MAX_RAW {
+                    return Err(CalibrationError::OutOfRange {
                         field: format!("{name}[{k}] ({finger})"),
                         value: v,
                     });
@@ -162,10 +185,11 @@ impl TactileCalibration {
 
     /// Loads and validates a calibration file; errors name the file and the field.
     pub fn load(path: &Path) -> Result<Self, CalibrationError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::CONFIG)
+            .map_err(|source| CalibrationError::Read {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Self::parse(path, &text)
     }
 
@@ -359,6 +383,11 @@ mod tests {
             TactileCalibration::new([0.0; 5], [1.0; 5], 0.0),
             Err(CalibrationError::BadFraction(_))
         ));
+        // Beyond any sensor's raw range: no contact would ever be detected.
+        let e = TactileCalibration::new([0.0; 5], [1e300, 1.0, 1.0, 1.0, 1.0], 0.003)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("upper[0] (FF)") && e.contains("1e300"), "{e}");
     }
 
     #[test]

@@ -116,6 +116,19 @@ pub struct AttemptLog {
     /// Whether `file` is a regular file: only those are synced (`fsync` on `/dev/null`
     /// or a pipe fails with EINVAL after the attempt has run).
     regular: bool,
+    /// Whether the file ended in a cut-off line when opened (a write that failed before
+    /// this fix, or another program's): the first line appended starts on a fresh line.
+    needs_newline: bool,
+}
+
+/// Whether the regular file at `path` is non-empty and does not end in a line break.
+fn ends_mid_line(path: &Path) -> bool {
+    use std::io::{Read, Seek, SeekFrom};
+    let Ok(mut f) = File::open(path) else {
+        return false;
+    };
+    let mut last = [0u8; 1];
+    f.seek(SeekFrom::End(-1)).is_ok() && f.read_exact(&mut last).is_ok() && last[0] != b'\n'
 }
 
 impl AttemptLog {
@@ -126,7 +139,7 @@ impl AttemptLog {
             source,
         };
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(io)?;
+            crate::util::fsx::create_dirs(dir).map_err(io)?;
         }
         // `create` here too: a dangling symbolic link at `path` is "already there" for
         // `create_new`, and its target is made as before (and kept).
@@ -154,6 +167,7 @@ impl AttemptLog {
             lines: 0,
             created,
             regular,
+            needs_newline: regular && ends_mid_line(path),
         })
     }
 
@@ -180,12 +194,34 @@ impl AttemptLog {
             source: std::io::Error::other(e),
         })?;
         line.push('\n');
-        let io = |source| LogError::Io {
+        if self.needs_newline {
+            line.insert(0, '\n');
+        }
+        let io = |source: std::io::Error| LogError::Io {
             path: self.path.clone(),
-            source,
+            source: std::io::Error::new(source.kind(), format!("cannot write: {source}")),
         };
-        self.file.write_all(line.as_bytes()).map_err(io)?;
-        self.file.flush().map_err(io)?;
+        // All or nothing: a line cut off by a full disk is truncated away, so the log
+        // holds whole lines only and the next one starts where this one would have.
+        let before = if self.regular {
+            Some(self.file.metadata().map_err(io)?.len())
+        } else {
+            None
+        };
+        let written = self
+            .file
+            .write_all(line.as_bytes())
+            .and_then(|()| self.file.flush());
+        if let Err(e) = written {
+            if let Some(len) = before {
+                if self.file.set_len(len).is_err() {
+                    // Could not take the part back: the next line starts afresh.
+                    self.needs_newline = true;
+                }
+            }
+            return Err(io(e));
+        }
+        self.needs_newline = false;
         self.lines += 1;
         Ok(())
     }
@@ -253,10 +289,11 @@ fn non_finite_field(record: &LogRecord) -> Option<String> {
 
 /// Reads an attempt log back; the error names the file and the line.
 pub fn read_log(path: &Path) -> Result<Vec<LogRecord>, LogError> {
-    let text = std::fs::read_to_string(path).map_err(|source| LogError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::DATA)
+        .map_err(|source| LogError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
@@ -326,6 +363,30 @@ mod tests {
             .nth(2)
             .unwrap()
             .starts_with(r#"{"kind":"outcome""#));
+    }
+
+    #[test]
+    fn a_line_after_a_cut_off_one_starts_on_a_fresh_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.jsonl");
+        let mut log = AttemptLog::open(&p).unwrap();
+        log.step(step(0)).unwrap();
+        drop(log);
+        // A line cut off by a full disk (before appends were all or nothing).
+        let mut text = std::fs::read_to_string(&p).unwrap();
+        text.push_str(r#"{"kind":"step","ste"#);
+        std::fs::write(&p, &text).unwrap();
+        let mut log = AttemptLog::open(&p).unwrap();
+        log.step(step(1)).unwrap();
+        log.step(step(2)).unwrap();
+        drop(log);
+        let text = std::fs::read_to_string(&p).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 4, "{text}");
+        assert_eq!(lines[1], r#"{"kind":"step","ste"#);
+        for l in [lines[0], lines[2], lines[3]] {
+            serde_json::from_str::<LogRecord>(l).unwrap();
+        }
     }
 
     #[test]

@@ -212,7 +212,7 @@ pub trait HandArm {
     /// [`HwError::InvalidCommand`].
     fn wait(&mut self, seconds: f64) -> Result<(), HwError> {
         check_duration(seconds)?;
-        std::thread::sleep(std::time::Duration::from_secs_f64(seconds));
+        std::thread::sleep(std::time::Duration::try_from_secs_f64(seconds).unwrap_or_default());
         Ok(())
     }
     /// Whether the object was held after the last [`ArmMotion::Lift`], where the backend
@@ -225,12 +225,16 @@ pub trait HandArm {
 
 /// Checks a [`HandArm::wait`] duration: finite and non-negative.
 pub fn check_duration(seconds: f64) -> Result<(), HwError> {
-    if seconds.is_finite() && seconds >= 0.0 {
+    // A day bounds every wait (and keeps it within a `Duration`).
+    if seconds.is_finite() && (0.0..=86_400.0).contains(&seconds) {
         Ok(())
     } else {
         Err(HwError::InvalidCommand {
             field: "wait seconds".into(),
-            detail: format!("{seconds} is not a finite non-negative duration"),
+            detail: format!(
+                "{} is not a duration in [0, 86400] s",
+                crate::util::num::short(seconds)
+            ),
         })
     }
 }

@@ -244,7 +244,8 @@ impl RosHandArm {
             .map_err(|e| disconnected(format!("cannot resolve {host}:{port}: {e}")))?
             .next()
             .ok_or_else(|| disconnected(format!("{host}:{port} has no address")))?;
-        let timeout = Duration::from_secs_f64(cfg.timeout_s);
+        let timeout = Duration::try_from_secs_f64(cfg.timeout_s.min(86_400.0))
+            .unwrap_or(Duration::from_secs(1));
         let stream = TcpStream::connect_timeout(&addr, timeout)
             .map_err(|e| disconnected(format!("cannot connect to {addr}: {e}")))?;
         stream.set_read_timeout(Some(timeout))?;

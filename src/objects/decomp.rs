@@ -15,7 +15,7 @@
 //! (read-only folder) only costs a warning. Files are written with
 //! [`crate::util::fsx::write_atomic`].
 
-use super::mesh::TriMesh;
+use super::mesh::{Aabb, TriMesh};
 use super::{ConvexHull, ObjectError};
 use crate::util::fsx::write_atomic;
 use crate::util::hash::Fnv128;
@@ -252,10 +252,35 @@ pub fn decompose_cached(
 ) -> Result<(Vec<ConvexHull>, CacheStatus), ObjectError> {
     let key = cache_key(mesh, params);
     let mut status = CacheStatus::Built;
-    match std::fs::read(cache_file) {
+    // A link (which could point at any file of the user's), a FIFO (which would block the
+    // read for good) or a device at the cache's path is neither read nor written: the
+    // hulls are computed and the cache skipped.
+    let usable = crate::util::fsx::is_plain_file_or_missing(cache_file);
+    if !usable {
+        tracing::warn!(
+            "{label}: hull cache {} is not a regular file (a link, FIFO or device); \
+             computing the hulls without caching them",
+            cache_file.display()
+        );
+    }
+    let read = if usable {
+        crate::util::fsx::read_bounded(cache_file, crate::util::fsx::limits::DATA)
+    } else {
+        Err(std::io::ErrorKind::NotFound.into())
+    };
+    match read {
         Ok(bytes) => match serde_json::from_slice::<CacheFile>(&bytes) {
-            Ok(c) if c.format == CACHE_FORMAT && c.key == key && valid_hulls(&c.hulls) => {
-                return Ok((c.hulls, CacheStatus::Hit));
+            Ok(c) if c.format == CACHE_FORMAT && c.key == key => {
+                match hulls_fit_mesh(&c.hulls, mesh) {
+                    Ok(()) => return Ok((c.hulls, CacheStatus::Hit)),
+                    Err(why) => {
+                        tracing::warn!(
+                            "{label}: hull cache {} does not fit the mesh ({why}); rebuilding",
+                            cache_file.display()
+                        );
+                        status = CacheStatus::Rebuilt;
+                    }
+                }
             }
             Ok(_) => {
                 tracing::warn!(
@@ -290,7 +315,16 @@ pub fn decompose_cached(
     };
     match serde_json::to_vec(&file) {
         Ok(bytes) => {
-            if let Err(e) = write_atomic(cache_file, &bytes) {
+            // Checked again just before the write: never through a link or into a FIFO.
+            if !crate::util::fsx::is_plain_file_or_missing(cache_file) {
+                // Said above when it was so before the decomposition.
+                if usable {
+                    tracing::warn!(
+                        "{label}: hull cache {} is not a regular file; not saved",
+                        cache_file.display()
+                    );
+                }
+            } else if let Err(e) = write_atomic(cache_file, &bytes) {
                 tracing::warn!("{label}: hull cache not saved: {e}");
             }
             // Return exactly what a later cache hit will read (serde_json's float parsing
@@ -305,11 +339,65 @@ pub fn decompose_cached(
     Ok((file.hulls, status))
 }
 
-fn valid_hulls(hulls: &[ConvexHull]) -> bool {
-    !hulls.is_empty()
-        && hulls.iter().all(|h| {
-            h.points.len() >= 4 && h.points.iter().all(|p| p.iter().all(|x| x.is_finite()))
-        })
+/// Whether cached hulls can be the decomposition of `mesh`: at least one hull, each of
+/// at least 4 finite points; every point within the mesh's bounding box (a tolerance of
+/// 1 % of its diagonal); the hulls' points spanning the box along each axis (to 10 % of
+/// the axis' extent at each side); and the hulls' volumes summing to at least half the
+/// mesh's volume (convex parts cover the solid). A hand-edited or truncated file that
+/// keeps a valid key fails one of these and is rebuilt. `Err` says which.
+pub fn hulls_fit_mesh(hulls: &[ConvexHull], mesh: &TriMesh) -> Result<(), String> {
+    use crate::util::num::short;
+    if hulls.is_empty() {
+        return Err("no hulls".into());
+    }
+    if let Some(k) = hulls.iter().position(|h| {
+        h.points.len() < 4 || h.points.iter().any(|p| p.iter().any(|x| !x.is_finite()))
+    }) {
+        return Err(format!(
+            "hull {k} has fewer than 4 points or a non-finite one"
+        ));
+    }
+    let Some(bb) = mesh.aabb() else {
+        return Err("the mesh is empty".into());
+    };
+    let e = bb.extents();
+    let tol = 0.01 * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+    for (k, h) in hulls.iter().enumerate() {
+        for p in &h.points {
+            if (0..3).any(|a| p[a] < bb.min[a] - tol || p[a] > bb.max[a] + tol) {
+                return Err(format!(
+                    "hull {k} has the point ({}, {}, {}) m outside the mesh's box",
+                    short(p[0]),
+                    short(p[1]),
+                    short(p[2])
+                ));
+            }
+        }
+    }
+    let span = Aabb::of_points(hulls.iter().flat_map(|h| h.points.iter()))
+        .ok_or_else(|| "no hull points".to_string())?;
+    for a in 0..3 {
+        let slack = 0.1 * e[a] + tol;
+        if span.min[a] > bb.min[a] + slack || span.max[a] < bb.max[a] - slack {
+            return Err(format!(
+                "the hulls do not span the mesh along {}",
+                ["x", "y", "z"][a]
+            ));
+        }
+    }
+    let mesh_volume = mesh.signed_volume().abs();
+    let hull_volume: f64 = hulls
+        .iter()
+        .map(|h| h.mesh().map_or(0.0, |m| m.signed_volume().abs()))
+        .sum();
+    if hull_volume < 0.5 * mesh_volume {
+        return Err(format!(
+            "the hulls hold {} of the mesh's {} m^3",
+            short(hull_volume),
+            short(mesh_volume)
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -349,5 +437,65 @@ mod tests {
         let mut m2 = m.clone();
         m2.translate([1e-6, 0.0, 0.0]);
         assert_ne!(k, cache_key(&m2, &p));
+    }
+
+    #[test]
+    fn caches_that_do_not_fit_the_mesh_are_rebuilt() {
+        let m = crate::objects::shape_kit::box_mesh([0.05, 0.04, 0.03]);
+        let p = DecompParams::default();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("box.hulls.json");
+        let (hulls, status) = decompose_cached(&m, &p, &file, "box").unwrap();
+        assert_eq!(status, CacheStatus::Built);
+        hulls_fit_mesh(&hulls, &m).unwrap();
+        assert_eq!(
+            decompose_cached(&m, &p, &file, "box").unwrap().1,
+            CacheStatus::Hit
+        );
+        let good: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&file).unwrap()).unwrap();
+        // A point moved 5 m away keeps the key but no longer fits.
+        let mut moved = good.clone();
+        moved["hulls"][0]["points"][0] = serde_json::json!([5.0, 0.0, 0.0]);
+        std::fs::write(&file, moved.to_string()).unwrap();
+        let (back, status) = decompose_cached(&m, &p, &file, "box").unwrap();
+        assert_eq!(status, CacheStatus::Rebuilt);
+        assert_eq!(back, hulls);
+        // Hulls that hold a sliver of the box.
+        let sliver = ConvexHull::from_points(&crate::objects::shape_kit::box_points(
+            [0.0, 0.0, 0.015],
+            [0.025, 0.02, 0.001],
+        ))
+        .unwrap();
+        let e = hulls_fit_mesh(&[sliver], &m).unwrap_err();
+        assert!(e.contains("span") || e.contains("m^3"), "{e}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn links_and_fifos_at_the_cache_path_are_left_alone() {
+        let m = crate::objects::shape_kit::box_mesh([0.05, 0.04, 0.03]);
+        let p = DecompParams::default();
+        let dir = tempfile::tempdir().unwrap();
+        let victim = dir.path().join("victim.txt");
+        std::fs::write(&victim, "keep").unwrap();
+        let link = dir.path().join("link.hulls.json");
+        std::os::unix::fs::symlink("victim.txt", &link).unwrap();
+        let (hulls, _) = decompose_cached(&m, &p, &link, "box").unwrap();
+        assert!(!hulls.is_empty());
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+        // A FIFO is not opened (the read would block for good) nor replaced.
+        let fifo = dir.path().join("fifo.hulls.json");
+        assert!(std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success());
+        decompose_cached(&m, &p, &fifo, "box").unwrap();
+        use std::os::unix::fs::FileTypeExt;
+        assert!(std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo());
     }
 }

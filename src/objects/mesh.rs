@@ -126,6 +126,84 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Checks an OBJ file's `v` and `f` lines before it is parsed, so that errors name the
+/// line (counted from 1): a vertex coordinate that is not a finite number (NaN, or beyond
+/// the parser's 32-bit range) and a face index 0 (OBJ indices count from 1, negative
+/// ones from the end), which the parser reports as "index out of bounds" only.
+fn check_obj_lines(path: &Path, bytes: &[u8]) -> Result<(), ObjectError> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut vertex = 0usize;
+    let bad = |line: usize, message: String| ObjectError::MeshParse {
+        path: path.display().to_string(),
+        message: format!("line {line}: {message}"),
+    };
+    for (i, line) in text.lines().enumerate() {
+        let mut tokens = line.split_whitespace();
+        match tokens.next() {
+            Some("v") => {
+                vertex += 1;
+                for t in tokens.take(3) {
+                    if t.parse::<f32>().is_ok_and(|x| !x.is_finite()) {
+                        return Err(bad(
+                            i + 1,
+                            format!(
+                                "vertex {vertex} has a NaN or infinite coordinate ({t}; at \
+                                 most about 3.4e38 is finite here)"
+                            ),
+                        ));
+                    }
+                }
+            }
+            Some("f") => {
+                for t in tokens {
+                    let index = t.split('/').next().unwrap_or_default();
+                    if index.parse::<i64>() == Ok(0) {
+                        return Err(bad(
+                            i + 1,
+                            "face index 0: OBJ vertex indices count from 1 (negative ones \
+                             from the last vertex)"
+                                .into(),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Checks a binary STL file's size against its triangle count (84 bytes of header and
+/// count, 50 per triangle) before it is parsed: a wrong count was reported as "failed to
+/// fill whole buffer" or a mesh "not watertight". A file that starts with `solid` and
+/// does not have the binary size is read as ASCII STL.
+fn check_stl_size(path: &Path, bytes: &[u8]) -> Result<(), ObjectError> {
+    let bad = |message: String| ObjectError::MeshParse {
+        path: path.display().to_string(),
+        message,
+    };
+    if bytes.len() < 84 {
+        if bytes.starts_with(b"solid") {
+            return Ok(());
+        }
+        return Err(bad(format!(
+            "{} bytes: shorter than a binary STL's 84-byte header and triangle count, and \
+             not ASCII STL (which starts with `solid`)",
+            bytes.len()
+        )));
+    }
+    let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+    let want = 84 + 50 * count;
+    if want == bytes.len() as u64 || bytes.starts_with(b"solid") {
+        return Ok(());
+    }
+    Err(bad(format!(
+        "the binary STL header gives {count} triangles, which take {want} bytes, but the \
+         file has {} bytes (a truncated or edited file)",
+        bytes.len()
+    )))
+}
+
 impl TriMesh {
     /// A mesh from vertices (metres) and triangles.
     pub fn new(vertices: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> Self {
@@ -152,10 +230,12 @@ impl TriMesh {
                 })
             }
         };
-        let bytes = std::fs::read(path).map_err(|error| ObjectError::Io {
-            path: path.display().to_string(),
-            error,
-        })?;
+        let bytes = crate::util::fsx::read_bounded(path, crate::util::fsx::limits::MESH).map_err(
+            |error| ObjectError::Io {
+                path: path.display().to_string(),
+                error,
+            },
+        )?;
         if is_obj {
             Self::from_obj_bytes(path, &bytes)
         } else {
@@ -165,6 +245,7 @@ impl TriMesh {
 
     /// Parses OBJ text; `path` is used in error messages only.
     pub fn from_obj_bytes(path: &Path, bytes: &[u8]) -> Result<TriMesh, ObjectError> {
+        check_obj_lines(path, bytes)?;
         let opts = tobj::LoadOptions {
             triangulate: true,
             single_index: false,
@@ -211,6 +292,7 @@ impl TriMesh {
 
     /// Parses ASCII or binary STL; `path` is used in error messages only.
     pub fn from_stl_bytes(path: &Path, bytes: &[u8]) -> Result<TriMesh, ObjectError> {
+        check_stl_size(path, bytes)?;
         let mut cursor = std::io::Cursor::new(bytes);
         let stl = stl_io::read_stl(&mut cursor).map_err(|e| ObjectError::MeshParse {
             path: path.display().to_string(),
@@ -684,7 +766,10 @@ mod tests {
         let mut m = unit_cube();
         m.vertices[3][1] = f64::NAN;
         let e = m.validate("nan.obj").unwrap_err().to_string();
-        assert!(e.contains("nan.obj") && e.contains("vertex 3"), "{e}");
+        assert!(
+            e.contains("nan.obj") && e.contains("vertex 4 (counted from 1)"),
+            "{e}"
+        );
         let mut m = unit_cube();
         m.triangles[2][1] = 99;
         assert!(matches!(
@@ -809,7 +894,20 @@ mod tests {
             assert!(e.contains(f) && e.contains(want), "{f}: {e}");
         };
         check("empty.obj", "empty");
-        check("nan.obj", "NaN");
+        check("nan.obj", "line 5: vertex 4 has a NaN");
+        // A face index 0 and a binary STL whose count does not fit its size say so.
+        let e =
+            TriMesh::from_obj_bytes(Path::new("z.obj"), b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("line 4: face index 0"), "{e}");
+        let mut stl = vec![0u8; 80];
+        stl.extend_from_slice(&2u32.to_le_bytes());
+        stl.extend_from_slice(&[0u8; 50]);
+        let e = TriMesh::from_stl_bytes(Path::new("c.stl"), &stl)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("gives 2 triangles, which take 184 bytes"), "{e}");
         check("open_box.obj", "not watertight");
         check("huge.obj", "too large");
         check("missing.obj", "cannot read");

@@ -92,7 +92,10 @@ pub enum ObjectError {
         path: String,
     },
     /// A vertex coordinate is NaN or infinite.
-    #[error("mesh {path}: vertex {index} has a NaN or infinite coordinate")]
+    #[error(
+        "mesh {path}: vertex {} (counted from 1) has a NaN or infinite coordinate",
+        index + 1
+    )]
     NonFiniteVertex {
         /// The file or object.
         path: String,
@@ -100,7 +103,12 @@ pub enum ObjectError {
         index: usize,
     },
     /// A triangle refers to a vertex that does not exist.
-    #[error("mesh {path}: triangle {triangle} uses vertex {index}, but there are only {vertex_count} vertices")]
+    #[error(
+        "mesh {path}: triangle {} uses vertex {}, but there are only {vertex_count} vertices \
+         (both counted from 1)",
+        triangle + 1,
+        index + 1
+    )]
     IndexOutOfRange {
         /// The file or object.
         path: String,
@@ -153,7 +161,11 @@ pub enum ObjectError {
         volume: f64,
     },
     /// The bounding box is larger than 1 m.
-    #[error("mesh {path} is too large: {extent_m:.3} m across (limit 1 m); is it in millimetres? set `scale = 0.001`")]
+    #[error(
+        "mesh {path} is too large: {} m across (limit 1 m); is it in millimetres? set \
+         `scale = 0.001`",
+        crate::util::num::short(*extent_m)
+    )]
     TooLarge {
         /// The file or object.
         path: String,
@@ -161,7 +173,10 @@ pub enum ObjectError {
         extent_m: f64,
     },
     /// The bounding box is smaller than 5 mm.
-    #[error("mesh {path} is too small: {extent_m:.5} m across (minimum 0.005 m); check `scale`")]
+    #[error(
+        "mesh {path} is too small: {} m across (minimum 0.005 m); check `scale`",
+        crate::util::num::short(*extent_m)
+    )]
     TooSmall {
         /// The file or object.
         path: String,
@@ -199,12 +214,14 @@ pub enum ObjectError {
         hint: String,
     },
     /// Two objects in one set share a name.
-    #[error("duplicate object name `{name}` in {source_name}")]
+    #[error("duplicate object name `{name}` in {source_name}{detail}")]
     DuplicateName {
         /// The repeated name.
         name: String,
         /// Where the set came from.
         source_name: String,
+        /// The colliding files (": a b.obj and a_b.obj both give it"), or empty.
+        detail: String,
     },
     /// A set resolved to no objects (an empty folder or manifest).
     #[error("{source_name} contains no objects")]

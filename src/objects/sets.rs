@@ -16,7 +16,6 @@
 
 use super::spec::{load_manifest, ObjectSpec, ShapeSpec};
 use super::{Object, ObjectError};
-use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 pub use super::build::{
@@ -136,12 +135,21 @@ fn mesh_spec(path: &Path) -> ObjectSpec {
 }
 
 fn check_unique(specs: &[ResolvedSpec], source: &str) -> Result<(), ObjectError> {
-    let mut seen = HashSet::new();
+    let mut seen: std::collections::HashMap<&str, &ResolvedSpec> = Default::default();
+    let file = |s: &ResolvedSpec| match &s.spec.shape {
+        ShapeSpec::Mesh { path, .. } => Some(path.display().to_string()),
+        _ => None,
+    };
     for s in specs {
-        if !seen.insert(s.spec.name.as_str()) {
+        if let Some(first) = seen.insert(s.spec.name.as_str(), s) {
+            let detail = match (file(first), file(s)) {
+                (Some(a), Some(b)) if a != b => format!(": {a} and {b} both give it"),
+                _ => String::new(),
+            };
             return Err(ObjectError::DuplicateName {
                 name: s.spec.name.clone(),
                 source_name: source.to_string(),
+                detail,
             });
         }
     }
@@ -275,6 +283,7 @@ mod tests {
     use crate::objects::spec::ObjectKind;
     use crate::objects::HullSource;
     use approx::assert_relative_eq;
+    use std::collections::HashSet;
 
     fn prepared(set: &str) -> Vec<Prepared> {
         resolve_specs(set)

@@ -92,7 +92,30 @@ impl Default for PolicyConfig {
     }
 }
 
+/// The most parameters a network may have (about 400 MB of `f32` weights, 1.6 GB with
+/// gradients and Adam's two moments): far above any configured network (about 0.2
+/// million with the defaults), far below what aborts the process.
+pub const MAX_PARAMETERS: u64 = 100_000_000;
+
 impl PolicyConfig {
+    /// The network's parameter count without its input layer (whose width is the
+    /// observation's): the hidden layers of the kind's actor and critic, in `u64` so that
+    /// widths near their bounds do not overflow.
+    pub fn parameter_estimate(&self) -> u64 {
+        let (m, e, h) = (
+            self.mlp_hidden as u64,
+            self.embed_dim as u64,
+            self.gru_hidden as u64,
+        );
+        match self.kind {
+            // Two hidden layers for the actor and the critic, the heads.
+            PolicyKind::Mlp => 2 * m * m + 64 * m,
+            // The embedding feeds the GRU (three gates over input and state), the
+            // critic's MLP reads the state.
+            PolicyKind::Gru => 3 * (e * h + h * h) + h * m + m * m + 64 * (e + h + m),
+        }
+    }
+
     /// Checks the settings' ranges.
     pub fn validate(&self) -> Result<(), PolicyError> {
         let positive = |field: &'static str, v: usize| {
@@ -108,6 +131,23 @@ impl PolicyConfig {
         positive("mlp_hidden", self.mlp_hidden)?;
         positive("embed_dim", self.embed_dim)?;
         positive("gru_hidden", self.gru_hidden)?;
+        let params = self.parameter_estimate();
+        if params > MAX_PARAMETERS {
+            return Err(PolicyError::Config {
+                field: "embed_dim/gru_hidden/mlp_hidden",
+                message: format!(
+                    "embed_dim = {}, gru_hidden = {} and mlp_hidden = {} make a network of \
+                     about {} million parameters, more than the limit of {} million (its \
+                     weights, gradients and optimiser state would not fit in memory); make \
+                     them smaller",
+                    self.embed_dim,
+                    self.gru_hidden,
+                    self.mlp_hidden,
+                    params / 1_000_000,
+                    MAX_PARAMETERS / 1_000_000
+                ),
+            });
+        }
         if !self.init_log_std.is_finite() || self.init_log_std.abs() > 20.0 {
             return Err(PolicyError::Config {
                 field: "init_log_std",

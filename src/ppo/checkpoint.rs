@@ -211,10 +211,12 @@ pub struct Checkpoint {
 /// Reads and checks the checkpoint file at `path`: a missing file, a corrupt file, missing
 /// or invalid metadata and non-finite values are errors naming the file.
 pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, PpoError> {
-    let bytes = std::fs::read(path).map_err(|source| PpoError::CheckpointIo {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::util::fsx::read_bounded(path, crate::util::fsx::limits::WEIGHTS).map_err(
+        |source| PpoError::CheckpointIo {
+            path: path.to_path_buf(),
+            source,
+        },
+    )?;
     let fmt_err = |message: String| PpoError::CheckpointFormat {
         path: path.to_path_buf(),
         message,

@@ -96,6 +96,13 @@ impl Default for PpoConfig {
     }
 }
 
+/// The most bytes a rollout's buffers may take: 8 GiB.
+pub const MAX_ROLLOUT_BYTES: u64 = 8 << 30;
+
+/// The observation width assumed when bounding the rollout buffers without the
+/// environment (the grasping observations are a few hundred values).
+const ROLLOUT_OBS_ESTIMATE: u64 = 512;
+
 impl PpoConfig {
     /// Loads a TOML config file (unknown keys are errors naming line and column).
     pub fn load(path: &Path) -> Result<Self, PpoError> {
@@ -112,6 +119,27 @@ impl PpoConfig {
     /// Number of updates in the planned run: `total_timesteps / batch_size` (at least 1).
     pub fn num_updates(&self) -> u64 {
         (self.total_timesteps / self.batch_size().max(1) as u64).max(1)
+    }
+
+    /// Refuses rollout buffers over [`MAX_ROLLOUT_BYTES`] for observations of `obs_len`
+    /// values: each transition holds its observation, the recurrent state and a few
+    /// scalars. `Err` says the sizes and the limit.
+    pub fn check_rollout_bytes(&self, obs_len: u64) -> Result<(), String> {
+        let per_transition = 4 * (obs_len + 2 * self.policy.gru_hidden as u64 + 16);
+        let transitions = self.num_envs as u64 * self.num_steps as u64;
+        let bytes = transitions.saturating_mul(per_transition);
+        if bytes <= MAX_ROLLOUT_BYTES {
+            return Ok(());
+        }
+        Err(format!(
+            "num_envs = {} x num_steps = {} is {transitions} transitions per rollout of \
+             {obs_len}-value observations, about {} GB of buffers (more than the limit of {} \
+             GB); lower num_envs or num_steps",
+            self.num_envs,
+            self.num_steps,
+            bytes >> 30,
+            MAX_ROLLOUT_BYTES >> 30
+        ))
     }
 
     /// Checks every field's range; the error names the field.
@@ -157,6 +185,10 @@ impl PpoConfig {
         if let Some(kl) = self.target_kl {
             real("target_kl", kl, 0.0, 1e6, true)?;
         }
+        // Bounded before anything is allocated (the environment's observation width is
+        // checked by the training config, which knows it).
+        self.check_rollout_bytes(ROLLOUT_OBS_ESTIMATE)
+            .map_err(|m| bad("num_steps", m))?;
         let mb = self.num_minibatches;
         if mb > self.batch_size() {
             return Err(bad(

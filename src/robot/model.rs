@@ -281,7 +281,8 @@ impl Robot {
 
     /// Loads and validates a URDF file.
     pub fn load(path: &Path, policy: MeshPolicy) -> Result<Robot, RobotError> {
-        let text = std::fs::read_to_string(path).map_err(|source| RobotError::Io {
+        let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::DATA)
+            .map_err(|source| RobotError::Io {
             path: path.to_path_buf(),
             source,
         })?;

@@ -65,7 +65,12 @@ pub enum RunError {
     #[error("invalid grasp: {0}")]
     BadGrasp(String),
     /// UR10e inverse kinematics found no solution for a pose of the attempt.
-    #[error("the UR10e cannot reach the {stage} pose of the grasp at ({x:.3}, {y:.3}, {z:.3}) m: {source}")]
+    #[error(
+        "the UR10e cannot reach the {stage} pose of the grasp at ({}, {}, {}) m: {source}",
+        coord(*x),
+        coord(*y),
+        coord(*z)
+    )]
     Ik {
         /// `approach` or `pre-grasp`.
         stage: &'static str,
@@ -98,4 +103,14 @@ pub enum RunError {
         /// What is wrong.
         detail: String,
     },
+}
+
+/// A coordinate in a message: three decimals for everyday values, as
+/// [`crate::util::num::short`] writes very large or small ones (`1e300`, not 300 digits).
+fn coord(v: f64) -> String {
+    if v.is_finite() && v.abs() < 1e6 {
+        format!("{v:.3}")
+    } else {
+        crate::util::num::short(v)
+    }
 }

@@ -187,15 +187,29 @@ impl PipelineConfig {
                 return bad(name, format!("{v} must be finite and >= 0"));
             }
         }
-        for (name, v) in [
-            ("baseline_period_s", self.baseline_period_s),
-            ("control_period_s", self.control_period_s),
-            ("lift_height_m", self.lift_height_m),
-            ("lift_duration_s", self.lift_duration_s),
+        // Each bounded too: a wait of 1e300 s would be refused only after the arm had
+        // moved (the backend's waits are at most a day), a lift of kilometres sent.
+        for (name, v, max) in [
+            ("baseline_period_s", self.baseline_period_s, 60.0),
+            ("control_period_s", self.control_period_s, 60.0),
+            ("lift_height_m", self.lift_height_m, 1.0),
+            ("lift_duration_s", self.lift_duration_s, 600.0),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(name, format!("{v} must be finite and > 0"));
+            if !(v.is_finite() && v > 0.0 && v <= max) {
+                return bad(
+                    name,
+                    format!("{} must be in (0, {max}]", crate::util::num::short(v)),
+                );
             }
+        }
+        if self.pregrasp_offset_m > 1.0 {
+            return bad(
+                "pregrasp_offset_m",
+                format!(
+                    "{} must be at most 1 m",
+                    crate::util::num::short(self.pregrasp_offset_m)
+                ),
+            );
         }
         if self.max_candidates == 0 || self.baseline_readings == 0 || self.preshape_commands == 0 {
             return bad(
@@ -755,7 +769,12 @@ fn lift_and_judge<B: HandArm>(
         Some(s) => (s, "simulator"),
         None => (contacts >= cfg.held_min_contacts, "tactile sensors"),
     };
-    let reason = if success {
+    let reason = if success && contacts == 0 {
+        // Held, yet no fingertip says so: the calibration's ranges do not fit the sensors.
+        "held after the lift, but no fingertip sensor reports contact: the tactile \
+         calibration does not fit the sensors (recalibrate)"
+            .to_string()
+    } else if success {
         format!("held after the lift ({contacts} fingertips in contact)")
     } else {
         format!("not held after the lift ({contacts} fingertips in contact)")
@@ -833,6 +852,13 @@ mod tests {
             ..PipelineConfig::default()
         };
         assert!(bad.validate().is_err());
+        // Bounded above too: refused before the arm moves, not at the first wait.
+        let bad = PipelineConfig {
+            lift_duration_s: 1e300,
+            ..PipelineConfig::default()
+        };
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(e.contains("lift_duration_s") && e.contains("1e300"), "{e}");
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("g.toml");
         std::fs::write(&p, "center = [0, 0, 0.05]\nclosing = [1, 0, \"x\"]\n").unwrap();

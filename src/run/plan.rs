@@ -57,7 +57,8 @@ pub fn load_grasp_file(path: &Path) -> Result<TwoFingerGrasp, RunError> {
         path: path.to_path_buf(),
         detail,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::CONFIG)
+        .map_err(|e| err(format!("cannot read: {e}")))?;
     let is_json = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"));
@@ -126,6 +127,7 @@ fn solve_arm(
         root_pose_for(robot, preshape, grasp).map_err(|e| RunError::BadGrasp(e.to_string()))?;
     let base_inv = cfg.arm_base.pose().inverse();
     let back = -grasp.approach.normalize() * cfg.pregrasp_offset_m;
+    check_above_table(robot, preshape, grasp, &back)?;
     let pre = Isometry3::from_parts(
         Translation3::from(root.translation.vector + back),
         root.rotation,
@@ -141,6 +143,137 @@ fn solve_arm(
     let q_pre = ur10e::ik(&(base_inv * pre), &ur10e::HOME).map_err(|e| ik_err("pre-grasp", e))?;
     let q_grasp = ur10e::ik(&(base_inv * root), &q_pre).map_err(|e| ik_err("grasp", e))?;
     Ok((q_pre, q_grasp))
+}
+
+/// How far below the table top (z = 0 in the world frame of grasps and clouds) the palm
+/// may be planned (m).
+pub const TABLE_MARGIN_M: f64 = 0.02;
+
+/// How far below the table top a fingertip of the preshape may be planned (m): over a
+/// flat object the open fingers reach past it and are stopped by the table as they close
+/// (the spatula's plan puts one 3.7 cm below the top and lifts it); deeper, the hand
+/// itself would go into the table.
+pub const FINGERTIP_TABLE_MARGIN_M: f64 = 0.06;
+
+/// Refuses a grasp whose hand would go into the table, before any command: the grasp
+/// centre below the table top, the palm more than [`TABLE_MARGIN_M`] or a fingertip (in
+/// the preshape) more than [`FINGERTIP_TABLE_MARGIN_M`] below it at the pre-grasp pose
+/// or the grasp pose (the approach between them is a straight line, so its ends bound
+/// it).
+fn check_above_table(
+    robot: &Robot,
+    preshape: &[f64; 24],
+    grasp: &TwoFingerGrasp,
+    back: &Vector3<f64>,
+) -> Result<(), RunError> {
+    use crate::util::num::short;
+    let at = |p: &Point3<f64>| format!("({}, {}, {}) m", short(p.x), short(p.y), short(p.z));
+    check_center(grasp)?;
+    let palm = crate::robot::grasp_map::palm_pose_for(robot, preshape, grasp)
+        .map_err(|e| RunError::BadGrasp(e.to_string()))?;
+    let tips = robot.fingertips_palm(preshape);
+    for (stage, shift) in [("grasp", Vector3::zeros()), ("pre-grasp", *back)] {
+        let points = std::iter::once(("the palm", palm * Point3::origin(), TABLE_MARGIN_M)).chain(
+            tips.iter()
+                .map(|t| ("a fingertip", palm * t, FINGERTIP_TABLE_MARGIN_M)),
+        );
+        for (what, p, margin) in points {
+            let p = p + shift;
+            if p.z < -margin {
+                return Err(RunError::BadGrasp(format!(
+                    "at the {stage} pose {what} would be at {}, {} m below the table top \
+                     (z = 0): the hand would be driven into the table",
+                    at(&p),
+                    short((-p.z * 1000.0).round() / 1000.0)
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a grasp centre below the table top (z = 0 in the world frame).
+fn check_center(grasp: &TwoFingerGrasp) -> Result<(), RunError> {
+    use crate::util::num::short;
+    let c = grasp.center;
+    if c.z < 0.0 {
+        return Err(RunError::BadGrasp(format!(
+            "the grasp centre ({}, {}, {}) m is below the table top (z = 0): the hand would \
+             be driven into the table",
+            short(c.x),
+            short(c.y),
+            short(c.z)
+        )));
+    }
+    Ok(())
+}
+
+/// The checks of a grasp source that need no robot, run before anything moves: a given
+/// grasp's centre above the table top, a cloud that can show an object
+/// ([`check_cloud`]). Planning checks the hand's poses against the table as well.
+pub fn check_source(source: &GraspSource) -> Result<(), RunError> {
+    match source {
+        GraspSource::Given(g) => check_center(g),
+        GraspSource::Cloud(points) => check_cloud(points),
+    }
+}
+
+/// The smallest extent of a cloud an object can have (m): the library's smallest side.
+pub const MIN_CLOUD_EXTENT_M: f64 = crate::objects::mesh::MIN_EXTENT_M;
+
+/// Refuses a cloud no object can have made, before any candidate is planned on it: one
+/// whose points all lie below the table top, one less than [`MIN_CLOUD_EXTENT_M`] across
+/// (3,000 copies of one point, a cloud in kilometres read as metres), or one whose points
+/// lie on a line (its second principal spread under a millimetre): planning "across the
+/// narrow axis" of such a cloud reported successes on nothing.
+pub fn check_cloud(points: &[Point3<f64>]) -> Result<(), RunError> {
+    use crate::util::num::short;
+    let bad = |m: String| Err(RunError::NoGrasp(format!("the cloud {m}")));
+    if points.is_empty() {
+        return bad("has no points".into());
+    }
+    let top = points.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
+    if top < 0.0 {
+        return bad(format!(
+            "lies wholly below the table top (z = 0; its highest point is at z = {} m): \
+             clouds are in the world frame, the table top at z = 0",
+            short(top)
+        ));
+    }
+    let (lo, hi) = points.iter().fold(
+        (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        ),
+        |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+    );
+    let span = (hi - lo).max();
+    if span < MIN_CLOUD_EXTENT_M {
+        return bad(format!(
+            "spans only {} m across its {} points (an object is at least {} m across): it \
+             shows no object",
+            short(span),
+            points.len(),
+            short(MIN_CLOUD_EXTENT_M)
+        ));
+    }
+    let n = points.len() as f64;
+    let mean = points.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / n;
+    let cov = points.iter().fold(nalgebra::Matrix3::zeros(), |a, p| {
+        let d = p.coords - mean;
+        a + d * d.transpose()
+    }) / n;
+    let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().copied().collect();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    let second = ev[1].max(0.0).sqrt();
+    if second < 1e-3 {
+        return bad(format!(
+            "lies on a line (its points spread {} m across it): it shows no object to \
+             close the hand on",
+            short(second)
+        ));
+    }
+    Ok(())
 }
 
 /// Plans the grasp (see the module docs) with the hand in `preshape` (see
@@ -211,6 +344,7 @@ pub fn plan_grasp_avoiding(
             Ok(make(&g, None, 0, 0, q))
         }
         GraspSource::Cloud(points) => {
+            check_cloud(points)?;
             let cands = grasp_candidates(points, &cfg.antipodal)?;
             let mut skipped = 0;
             let mut first_err = None;
@@ -324,5 +458,45 @@ mod tests {
             "{e}"
         );
         assert!(e.to_string().contains("(3.000, 0.000, 0.050)"), "{e}");
+    }
+
+    #[test]
+    fn grasps_into_the_table_and_clouds_of_nothing_are_refused() {
+        let robot = Robot::builtin(Side::Left);
+        let cfg = PipelineConfig::default();
+        let pre = cfg.preshape_angles(&EnvConfig::default()).unwrap();
+        let plan_at = |z: f64| {
+            let g = TwoFingerGrasp::top_down(Point3::new(0.0, 0.0, z), 0.0);
+            plan_grasp(&robot, &GraspSource::Given(g), &pre, &cfg)
+        };
+        plan_at(0.03).unwrap();
+        let e = plan_at(-0.5).unwrap_err().to_string();
+        assert!(e.contains("below the table top"), "{e}");
+        // Approached from below: the palm comes up through the table.
+        let up = TwoFingerGrasp {
+            center: Point3::new(0.0, 0.0, 0.05),
+            approach: Vector3::new(0.0, 0.0, 1.0),
+            closing: Vector3::new(1.0, 0.0, 0.0),
+        };
+        let e = plan_grasp(&robot, &GraspSource::Given(up), &pre, &cfg)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("the palm would be at") && e.contains("below the table top"),
+            "{e}"
+        );
+        let same = vec![Point3::new(0.0, 0.0, 0.03); 3000];
+        let e = check_cloud(&same).unwrap_err().to_string();
+        assert!(e.contains("spans only 0 m"), "{e}");
+        let line: Vec<_> = (0..100)
+            .map(|i| Point3::new(0.001 * i as f64, 0.0, 0.03))
+            .collect();
+        let e = check_cloud(&line).unwrap_err().to_string();
+        assert!(e.contains("lies on a line"), "{e}");
+        let below: Vec<_> = (0..100)
+            .map(|i| Point3::new(0.001 * (i % 10) as f64, 0.001 * (i / 10) as f64, -0.5))
+            .collect();
+        let e = check_cloud(&below).unwrap_err().to_string();
+        assert!(e.contains("wholly below the table top"), "{e}");
     }
 }

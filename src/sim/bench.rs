@@ -113,7 +113,7 @@ pub fn run(
         .map(|_| HandSim::new(robot, ObjectSpec::default_box(), cfg.clone()))
         .collect::<Result<Vec<_>, _>>()?;
     let start = Instant::now();
-    let deadline = start + Duration::from_secs_f64(seconds);
+    let deadline = start + Duration::try_from_secs_f64(seconds).unwrap_or_default();
     let tallies: Vec<Tally> = if envs == 1 {
         vec![run_env(&mut sims[0], 0, deadline)]
     } else {

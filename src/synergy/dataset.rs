@@ -238,7 +238,8 @@ impl Dataset {
         limits: &[(f64, f64); N_FINGER_JOINTS],
         opts: &LoadOptions,
     ) -> Result<Dataset, DatasetError> {
-        let text = std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
+        let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::DATA)
+            .map_err(|source| DatasetError::Io {
             path: path.to_path_buf(),
             source,
         })?;

@@ -434,7 +434,8 @@ impl SynergyModel {
 
     /// Reads and validates a model written by [`SynergyModel::save`].
     pub fn load(path: &Path) -> Result<SynergyModel, SynergyError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SynergyError::Io {
+        let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::DATA)
+            .map_err(|source| SynergyError::Io {
             path: path.to_path_buf(),
             source,
         })?;

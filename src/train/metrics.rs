@@ -212,10 +212,11 @@ pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<MetricsRow>, TrainError>
 
 /// Reads the metrics file at `path`.
 pub fn read_csv(path: &Path) -> Result<Vec<MetricsRow>, TrainError> {
-    let text = std::fs::read_to_string(path).map_err(|source| TrainError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::DATA)
+        .map_err(|source| TrainError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     parse_csv(path, &text)
 }
 

@@ -106,6 +106,24 @@ pub enum TrainError {
     /// A file could not be written.
     #[error(transparent)]
     Write(#[from] crate::util::fsx::WriteError),
+    /// A folder or file could not be created.
+    #[error("cannot create {path}: {source}")]
+    Create {
+        /// The folder or file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A stale file could not be removed.
+    #[error("cannot remove {path}: {source}")]
+    Remove {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
     /// A file or folder could not be read.
     #[error("cannot read {path}: {source}")]
     Io {
@@ -133,6 +151,14 @@ pub enum TrainError {
     RunExists {
         /// The run folder.
         dir: PathBuf,
+    },
+    /// The folder is no run folder (a checkpoint folder, a folder of other files).
+    #[error("--out {dir} {why}: train into a new folder (or a run folder to --resume)")]
+    NotARunFolder {
+        /// The folder.
+        dir: PathBuf,
+        /// What it is instead.
+        why: String,
     },
     /// Another process holds the run folder's lock.
     #[error(

@@ -115,7 +115,10 @@ fn discard_unfinished(dir: &Path) -> Result<(), TrainError> {
             || name == files::PLOT
             || (name.starts_with(files::EVENTS_PREFIX) && name.ends_with(files::EVENTS_SUFFIX));
         if stale && entry.path().is_file() {
-            std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
+            std::fs::remove_file(entry.path()).map_err(|source| TrainError::Remove {
+                path: entry.path(),
+                source,
+            })?;
         }
     }
     Ok(())
@@ -123,8 +126,64 @@ fn discard_unfinished(dir: &Path) -> Result<(), TrainError> {
 
 /// Takes the exclusive lock of run folder `dir` (created if needed), or says which
 /// folder is in use.
+/// Refuses a folder that is no run folder, before anything is written in it: a
+/// checkpoint folder (its `config.toml` would be replaced by the run's, and the
+/// checkpoint no longer load), a folder inside a run's `checkpoints`, or a non-empty
+/// folder without a run's `config.toml` (the repository, a folder of other files). A
+/// missing or empty folder, or a run folder, is fine.
+pub fn check_run_folder(dir: &Path) -> Result<(), TrainError> {
+    let refuse = |why: String| {
+        Err(TrainError::NotARunFolder {
+            dir: dir.to_path_buf(),
+            why,
+        })
+    };
+    if !dir.exists() {
+        return Ok(());
+    }
+    if dir.join(CHECKPOINT_FILE).exists() {
+        return refuse(format!(
+            "is a checkpoint folder (it holds {CHECKPOINT_FILE}); training there would replace \
+             its config.toml"
+        ));
+    }
+    let resolved = crate::util::fsx::resolved(dir);
+    if resolved.ancestors().skip(1).any(|a| {
+        a.join(CHECKPOINT_FILE).is_file()
+            || (a.file_name().is_some_and(|n| n == "checkpoints")
+                && a.parent().is_some_and(|p| p.join(files::CONFIG).is_file()))
+    }) {
+        return refuse("lies inside a run's checkpoints or a checkpoint folder".into());
+    }
+    let entries = std::fs::read_dir(dir).map_err(|source| TrainError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut others = Vec::new();
+    let mut has_config = false;
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        match name.as_str() {
+            files::LOCK => {}
+            files::CONFIG => has_config = true,
+            _ => others.push(name),
+        }
+    }
+    if !has_config && !others.is_empty() {
+        others.sort();
+        let shown: Vec<&str> = others.iter().take(3).map(String::as_str).collect();
+        return refuse(format!(
+            "is not empty and not a run folder (no {}; it holds {}{})",
+            files::CONFIG,
+            shown.join(", "),
+            if others.len() > 3 { ", ..." } else { "" }
+        ));
+    }
+    Ok(())
+}
+
 fn lock_run_dir(dir: &Path) -> Result<std::fs::File, TrainError> {
-    std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+    crate::util::fsx::create_dirs(dir).map_err(|source| TrainError::Create {
         path: dir.to_path_buf(),
         source,
     })?;
@@ -134,7 +193,7 @@ fn lock_run_dir(dir: &Path) -> Result<std::fs::File, TrainError> {
         .truncate(false)
         .write(true)
         .open(&path)
-        .map_err(|source| TrainError::Io {
+        .map_err(|source| TrainError::Create {
             path: path.clone(),
             source,
         })?;
@@ -151,7 +210,7 @@ fn lock_run_dir(dir: &Path) -> Result<std::fs::File, TrainError> {
             );
             Ok(file)
         }
-        Err(std::fs::TryLockError::Error(source)) => Err(TrainError::Io { path, source }),
+        Err(std::fs::TryLockError::Error(source)) => Err(TrainError::Create { path, source }),
     }
 }
 
@@ -181,10 +240,11 @@ fn env_differences(latest: &Path, new: &TrainConfig) -> Result<Vec<String>, Trai
     if !path.is_file() {
         return Ok(Vec::new());
     }
-    let text = std::fs::read_to_string(&path).map_err(|source| TrainError::Io {
-        path: path.clone(),
-        source,
-    })?;
+    let text = crate::util::fsx::read_to_string_bounded(&path, crate::util::fsx::limits::DATA)
+        .map_err(|source| TrainError::Io {
+            path: path.clone(),
+            source,
+        })?;
     let env_table = |t: &str, p: &Path| -> Result<toml::Table, TrainError> {
         let table: toml::Table =
             crate::util::config::parse_toml(p, t).map_err(TrainError::ConfigFile)?;
@@ -264,6 +324,7 @@ impl TrainSession {
         // Fails on values the run folder's config.toml cannot hold, before the folder
         // is created.
         let config_text = cfg.to_toml_string()?;
+        check_run_folder(dir)?;
         let created = !dir.exists();
         let lock = lock_run_dir(dir)?;
         let opened = Self::open_locked(cfg, dir, opts, lock, config_text);

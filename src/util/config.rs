@@ -47,10 +47,11 @@ pub fn parse_toml<T: DeserializeOwned>(path: &Path, src: &str) -> Result<T, Conf
 
 /// Reads and parses the TOML file at `path` into `T`.
 pub fn load_toml<T: DeserializeOwned>(path: &Path) -> Result<T, ConfigError> {
-    let src = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let src = crate::util::fsx::read_to_string_bounded(path, crate::util::fsx::limits::CONFIG)
+        .map_err(|source| ConfigError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     parse_toml(path, &src)
 }
 

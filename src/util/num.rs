@@ -12,6 +12,23 @@ pub fn short(v: f64) -> String {
     }
 }
 
+/// The longest time budget any minutes input may give: a year (525,960 minutes). Beyond
+/// it a budget is a typo, and at 1e18 minutes it no longer fits a `Duration`.
+pub const MAX_MINUTES: f64 = 525_960.0;
+
+/// Checks a time budget in minutes: finite, positive and at most [`MAX_MINUTES`]; `Err`
+/// says so, with `m` as [`short`] writes it.
+pub fn check_minutes(m: f64) -> Result<(), String> {
+    if m.is_finite() && m > 0.0 && m <= MAX_MINUTES {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} must be a positive number of minutes, at most {MAX_MINUTES} (a year)",
+            short(m)
+        ))
+    }
+}
+
 /// A config value's range check: `Ok` when `v` is finite and in `[lo, hi]`, else the
 /// field and "V is outside [LO, HI]UNIT" with `v` as [`short`] writes it (`unit` starts
 /// with its space, or is empty). The `(field, message)` form is what the environment's

@@ -92,10 +92,12 @@ pub struct PointCloud {
 impl PointCloud {
     /// Reads a `.pcd` or `.ply` file (chosen by extension, else by the first bytes).
     pub fn load(path: &Path) -> Result<Self, CloudError> {
-        let bytes = std::fs::read(path).map_err(|source| CloudError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::util::fsx::read_bounded(path, crate::util::fsx::limits::MESH).map_err(
+            |source| CloudError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
