@@ -10,7 +10,7 @@ use grasp::env::obs::Modality;
 use grasp::eval::conditions::EvalConditions;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::rank::MAX_RANK_TOP;
-use grasp::eval::record::{agent_file_name, write_index, RecordOptions};
+use grasp::eval::record::{self, agent_file_name, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
     read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats, RankedPregrasp,
@@ -20,6 +20,7 @@ use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlann
 use grasp::robot::{Robot, Side};
 use grasp::sim::{HandSim, SimConfig};
 use grasp::util::fsx::{check_writable_file, write_atomic};
+use grasp::util::signal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -386,7 +387,7 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
             ),
         ),
     };
-    let interrupted = STOP.load(Ordering::SeqCst);
+    let interrupted = signal::stopped();
     if interrupted && results.is_empty() {
         eprintln!("interrupted (SIGINT or SIGTERM) before any trial finished: nothing to report");
         std::process::exit(130);
@@ -426,23 +427,21 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
     }
     if let (Some(dir), true) = (&a.rec.record, a.from_json.is_empty()) {
         let entries: Vec<_> = results.iter().flat_map(|r| r.recordings.clone()).collect();
-        let index = write_index(dir, &entries)
+        let errors: Vec<String> = results
+            .iter()
+            .flat_map(|r| r.record_errors.iter().cloned())
+            .collect();
+        let done = record::finish(dir, &entries, &errors)
             .with_context(|| format!("writing the index of {}", dir.display()))?;
         if !g.quiet {
             eprintln!(
                 "recorded {} episodes: open {}",
-                entries.len(),
-                index.display()
+                done.episodes,
+                done.index.display()
             );
         }
-        let errors: Vec<&String> = results.iter().flat_map(|r| &r.record_errors).collect();
-        if let Some(first) = errors.first() {
-            bail!(
-                "--record {}: {} episodes could not be recorded (the results above are \
-                 complete): {first}",
-                dir.display(),
-                errors.len()
-            );
+        if let Some(lost) = done.lost {
+            bail!(lost);
         }
     }
     if interrupted {
@@ -458,26 +457,6 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
         std::process::exit(130);
     }
     Ok(())
-}
-
-/// Set by SIGINT or SIGTERM during an evaluation: no trial starts after it, and the
-/// finished ones are printed and written (a second signal exits at once).
-static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Installs the SIGINT and SIGTERM handler of an evaluation ([`STOP`]).
-fn stop_on_signal(quiet: bool) -> Result<()> {
-    ctrlc::set_handler(move || {
-        if STOP.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        if !quiet {
-            eprintln!(
-                "\ninterrupted (SIGINT or SIGTERM): finishing the trials in progress, then \
-                 printing and writing the finished ones (again to quit at once)"
-            );
-        }
-    })
-    .context("installing the Ctrl-C and SIGTERM handler")
 }
 
 /// Refuses outputs that would overwrite an input (a `--from-json` file, a checkpoint's
@@ -844,7 +823,11 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     let rec_names = recording_names(a, &agents, record.as_ref(), &names)?;
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?;
-    stop_on_signal(g.quiet)?;
+    signal::stop_on_signal(
+        "finishing the trials in progress, then printing and writing the finished ones",
+        g.quiet,
+    )
+    .context("installing the Ctrl-C and SIGTERM handler")?;
     let mut results = Vec::new();
     for (i, ag) in agents.iter().enumerate() {
         let record = record.as_ref().map(|r| RecordOptions {
@@ -885,7 +868,7 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
                 a.trials
             );
         }
-        if STOP.load(Ordering::SeqCst) {
+        if signal::stopped() {
             break;
         }
         results.push(evaluate_until(
@@ -899,7 +882,7 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             &make_env,
             &ag.spec,
             record.as_ref(),
-            Some(&STOP),
+            Some(&signal::STOP),
         )?);
         if results.last().is_some_and(|r| r.objects.is_empty()) {
             // Stopped by a signal before any of its trials finished.

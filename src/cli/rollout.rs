@@ -5,14 +5,14 @@ use clap::Args;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{run_episode, EnvConfig, EpisodeSummary, GraspEnv, RandomAgent};
 use grasp::eval::record::{
-    record_agent_episode, record_baseline_episode, write_index, write_recording, RecordingEntry,
+    finish, record_agent_episode, record_baseline_episode, write_recording, RecordingEntry,
 };
 use grasp::robot::{Robot, Side};
 use grasp::sim::ObjectSpec;
 use grasp::synergy::SynergyModel;
+use grasp::util::signal;
 use rayon::prelude::*;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use super::Global;
@@ -93,12 +93,16 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     let seed = g.seed.unwrap_or(0);
     let n_threads = threads(a.threads)?.min(a.episodes);
     let start = Instant::now();
-    install_stop(g.quiet)?;
+    signal::stop_on_signal(
+        "finishing the episodes in progress, then printing them",
+        g.quiet,
+    )
+    .context("installing the Ctrl-C and SIGTERM handler")?;
     let record_errors = std::sync::Mutex::new(Vec::new());
     let mut done = run_episodes(&a, kind, seed, n_threads, &record_errors)?;
     let wall = start.elapsed().as_secs_f64();
     done.sort_by_key(|d| d.0);
-    let interrupted = STOP.load(Ordering::SeqCst);
+    let interrupted = signal::stopped();
     if interrupted && done.is_empty() {
         eprintln!("interrupted (SIGINT or SIGTERM) before any episode finished: nothing to report");
         std::process::exit(130);
@@ -108,23 +112,18 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     report(&a, g, seed, &all, wall, n_threads)?;
     if let Some(dir) = &a.rec.record {
         let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
-        let index = write_index(dir, &entries)
+        let errors = record_errors.into_inner().unwrap_or_default();
+        let done = finish(dir, &entries, &errors)
             .with_context(|| format!("writing the index of {}", dir.display()))?;
         if !g.quiet {
             eprintln!(
                 "recorded {} episodes: open {}",
-                entries.len(),
-                index.display()
+                done.episodes,
+                done.index.display()
             );
         }
-        let errors = record_errors.into_inner().unwrap_or_default();
-        if let Some(first) = errors.first() {
-            bail!(
-                "--record {}: {} episodes could not be recorded (the results above are \
-                 complete): {first}",
-                dir.display(),
-                errors.len()
-            );
+        if let Some(lost) = done.lost {
+            bail!(lost);
         }
     }
     if interrupted {
@@ -140,25 +139,6 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
         std::process::exit(130);
     }
     Ok(())
-}
-
-/// Set by SIGINT or SIGTERM during a rollout: no episode starts after it, and the
-/// finished ones are printed and recorded (a second signal exits at once).
-static STOP: AtomicBool = AtomicBool::new(false);
-
-fn install_stop(quiet: bool) -> Result<()> {
-    ctrlc::set_handler(move || {
-        if STOP.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        if !quiet {
-            eprintln!(
-                "\ninterrupted (SIGINT or SIGTERM): finishing the episodes in progress, then \
-                 printing them (again to quit at once)"
-            );
-        }
-    })
-    .context("installing the Ctrl-C and SIGTERM handler")
 }
 
 /// The agent of `--policy` (0: random, 1 and 2: the baselines), after checking the other
@@ -220,7 +200,7 @@ fn run_episodes(
                 )?;
                 let n = model.n_components() + 2;
                 idx.iter()
-                    .take_while(|_| !STOP.load(Ordering::SeqCst))
+                    .take_while(|_| !signal::stopped())
                     .map(|&i| {
                         let s = grasp::env::api::episode_seed(seed, 0, i as u64);
                         if let Some(dir) = &a.rec.record {

@@ -515,6 +515,43 @@ pub fn index_html(entries: &[RecordingEntry]) -> String {
     s
 }
 
+/// A recording folder once its index is written: the index's path, the episodes it
+/// links, and the failure to tell when some episodes could not be written (the
+/// evaluation's results are complete all the same).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finished {
+    /// `dir/index.html`.
+    pub index: PathBuf,
+    /// Episodes linked from the index.
+    pub episodes: usize,
+    /// `Some("--record DIR: N episodes could not be recorded (...): first error")` when
+    /// any episode's files could not be written.
+    pub lost: Option<String>,
+}
+
+/// Writes the index of `entries` into `dir` and says which of the episodes were lost
+/// (`errors`, one message per episode that could not be written).
+pub fn finish(
+    dir: &Path,
+    entries: &[RecordingEntry],
+    errors: &[String],
+) -> Result<Finished, RecordError> {
+    let index = write_index(dir, entries)?;
+    let lost = errors.first().map(|first| {
+        format!(
+            "--record {}: {} episodes could not be recorded (the results above are \
+             complete): {first}",
+            dir.display(),
+            errors.len()
+        )
+    });
+    Ok(Finished {
+        index,
+        episodes: entries.len(),
+        lost,
+    })
+}
+
 /// Writes `index.html` for `entries` into `dir` (atomically).
 pub fn write_index(dir: &Path, entries: &[RecordingEntry]) -> Result<PathBuf, RecordError> {
     let p = dir.join(INDEX_FILE);

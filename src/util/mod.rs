@@ -1,7 +1,7 @@
 //! Small helpers shared across the crate: where a default naming a shipped file lies
 //! ([`assets`]), atomic writes, TOML configuration loading, a stable hash, the torque
-//! levels, thread counts, numbers in messages, repeats in lists and the statistics of
-//! measurements.
+//! levels, thread counts, numbers in messages, repeats in lists, stopping on a signal and
+//! the statistics of measurements.
 
 pub mod assets;
 pub mod config;
@@ -10,5 +10,6 @@ pub mod hash;
 pub mod levels;
 pub mod num;
 pub mod seq;
+pub mod signal;
 pub mod stats;
 pub mod threads;
