@@ -159,11 +159,11 @@ fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {
     };
     let policy = assets::default_or_given(&a.policy, REGRESSION_POLICY, "--policy")?;
     let setup = RegressionSetup {
-        objects: super::rollout::sim_objects(&a.objects)?,
+        objects: super::sim_objects(&a.objects)?,
         trials: a.trials,
         seed: g.seed.unwrap_or(0),
         policy: policy.clone(),
-        threads: super::rollout::threads(a.threads)?,
+        threads: super::threads(a.threads)?,
         throughput_envs: a.envs,
         throughput_steps: a.steps,
     };
@@ -284,7 +284,7 @@ fn med<T>(runs: &[T], f: impl Fn(&T) -> f64) -> f64 {
 fn sim(a: BenchSimArgs, g: &Global) -> Result<()> {
     check_sizes(a.envs, a.seconds)?;
     let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
-    let threads = super::rollout::threads(a.threads)?;
+    let threads = super::threads(a.threads)?;
     let robot = Robot::builtin(Side::Left);
     let runs = alternate(&configs, a.rounds, |cfg| {
         let one = bench::run(&robot, cfg, 1, 1, a.seconds)?;
@@ -400,7 +400,7 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
     check_sizes(a.envs, a.seconds)?;
     let configs = ab_configs(a.config.as_ref(), a.compare.as_ref(), a.rounds)?;
     let robot = Robot::builtin(Side::Left);
-    let model = super::rollout::load_synergy(None, 5)?;
+    let model = super::load_synergy(None, 5)?;
     // `procedural`: each env builds a fresh stream object every few episodes, as training
     // on the stream does, so the figure includes the objects' build cost.
     let on_stream = a.objects == grasp::objects::stream::STREAM_SET;
@@ -409,9 +409,9 @@ fn env(a: BenchEnvArgs, g: &Global) -> Result<()> {
         let first = ObjectStream::new(StreamConfig::default()).first_object();
         vec![first.map_err(|m| anyhow::anyhow!("procedural stream: {m}"))?]
     } else {
-        super::rollout::sim_objects(&a.objects)?
+        super::sim_objects(&a.objects)?
     };
-    let threads = super::rollout::threads(a.threads)?;
+    let threads = super::threads(a.threads)?;
     let seed = g.seed.unwrap_or(0);
     let runs = alternate(&configs, a.rounds, |cfg| -> Result<EnvFigures> {
         let envs = (0..a.envs)

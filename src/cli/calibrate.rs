@@ -5,8 +5,8 @@ use clap::Args;
 use grasp::run::calibrate::CalibrationReport;
 use std::path::PathBuf;
 
-use super::run::{calibrate_sim, sim_backend, sim_config, sim_object, Backend};
 use super::Global;
+use super::{calibrate_sim, sim_backend, sim_config, sim_object, Backend};
 
 /// Calibrate the fingertip sensors: lower range = mean of 10 still readings, upper range
 /// = maximum while each fingertip is pressed, contact above 0.3 % of the range.
@@ -119,7 +119,7 @@ fn ros_calibrate(a: &CalibrateArgs) -> Result<CalibrationReport> {
             grasp::util::num::short(a.press_seconds)
         );
     }
-    let mut arm = super::run::connect_ros(&a.ros_url)?;
+    let mut arm = super::connect_ros(&a.ros_url)?;
     let secs = a.press_seconds;
     eprintln!("keep the hand still and untouched ...");
     Ok(grasp::run::calibrate::calibrate_tactile(
@@ -145,5 +145,5 @@ fn ros_calibrate(a: &CalibrateArgs) -> Result<CalibrationReport> {
 
 #[cfg(not(feature = "ros"))]
 fn ros_calibrate(_a: &CalibrateArgs) -> Result<CalibrationReport> {
-    bail!(super::run::NO_ROS)
+    bail!(super::NO_ROS)
 }

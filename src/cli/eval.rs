@@ -25,8 +25,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
-use super::rollout::{load_synergy, sim_objects, threads};
 use super::Global;
+use super::{load_synergy, sim_objects, threads};
 
 /// Evaluate agents per object on identical initial poses and print a Table-I-style table.
 #[derive(Debug, Args)]

@@ -6,7 +6,7 @@ use clap::Args;
 use grasp::experiment::{evaluate_runs, markdown, plan, run_grid, write_reports, GridOptions};
 use std::path::PathBuf;
 
-use super::rollout::threads;
+use super::threads;
 use super::Global;
 
 /// Run a grid of training runs (variants x seeds) and summarise it.

@@ -1,6 +1,7 @@
 //! Subcommands, one module each. Each module has an `Args` struct (clap derive) and a
 //! `run` function; this file only wires them together.
 
+use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 
 mod bench;
@@ -295,6 +296,121 @@ pub fn sim_config(path: Option<&std::path::PathBuf>) -> anyhow::Result<grasp::si
             path.map_or_else(String::new, |p| p.display().to_string())
         )
     })
+}
+
+// The helpers several commands share (the objects, synergy model, thread count and
+// simulated robot of a command line), here rather than in one command's file.
+
+/// Resolves an `--objects` argument and builds its objects (hulls from the cache). Shared
+/// by every command that takes `--objects`.
+pub fn load_objects(arg: &str) -> anyhow::Result<Vec<grasp::objects::Object>> {
+    let ctx = grasp::objects::BuildContext::from_env();
+    grasp::objects::sets::load_objects(arg, &ctx)
+        .with_context(|| format!("cannot load objects `{arg}`"))
+}
+
+/// Loads the synergy model (shipped one by default) with `n` components.
+pub fn load_synergy(
+    path: Option<&std::path::PathBuf>,
+    n: usize,
+) -> anyhow::Result<grasp::synergy::SynergyModel> {
+    let model = match path {
+        Some(p) => grasp::synergy::SynergyModel::load(p)
+            .with_context(|| format!("loading synergy model {}", p.display()))?,
+        None => grasp::synergy::default_model(),
+    };
+    model
+        .truncated(n)
+        .with_context(|| format!("using {n} synergy components"))
+}
+
+/// Resolves `--objects` into the simulator's object descriptions.
+pub fn sim_objects(arg: &str) -> anyhow::Result<Vec<(String, grasp::sim::ObjectSpec)>> {
+    let objects = load_objects(arg)?;
+    // Every object is checked before any episode runs, naming the set (the manifest, the
+    // folder) and the object.
+    objects
+        .iter()
+        .map(|o| {
+            let spec = grasp::sim::ObjectSpec::simulable(o)
+                .map_err(|e| anyhow::anyhow!(e))
+                .with_context(|| format!("objects `{arg}`"))?;
+            Ok((o.name.clone(), spec))
+        })
+        .collect()
+}
+
+/// Number of worker threads: the `--threads` flag (checked by the one rule of
+/// [`grasp::util::threads`]) or the available cores.
+pub fn threads(flag: Option<usize>) -> anyhow::Result<usize> {
+    grasp::util::threads::resolve(flag).map_err(|m| anyhow::anyhow!("--threads {m}"))
+}
+
+/// Which hand-arm system to drive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// The simulator with a raw-sensor model.
+    Sim,
+    /// The Shadow hand's ROS 1 driver and the UR10e through rosbridge (feature `ros`).
+    Ros,
+}
+
+/// The object for the sim backend: `box`, `cylinder` or one library object.
+pub fn sim_object(name: &str) -> anyhow::Result<grasp::sim::ObjectSpec> {
+    match name.trim() {
+        "box" => return Ok(grasp::sim::ObjectSpec::default_box()),
+        "cylinder" => return Ok(grasp::sim::ObjectSpec::default_cylinder()),
+        _ => {}
+    }
+    let mut objs = sim_objects(name)?;
+    if objs.len() != 1 {
+        anyhow::bail!(
+            "--object `{name}` holds {} objects; it must name exactly one",
+            objs.len()
+        );
+    }
+    Ok(objs.remove(0).1)
+}
+
+/// The simulated hand-arm with the raw-sensor model seeded by `seed`.
+pub fn sim_backend(
+    object: grasp::sim::ObjectSpec,
+    sim_cfg: grasp::sim::SimConfig,
+    seed: u64,
+) -> anyhow::Result<grasp::run::sim_backend::SimHandArm> {
+    let mut cfg = grasp::run::sim_backend::SimBackendConfig::default();
+    cfg.raw.seed = seed;
+    let robot = grasp::robot::Robot::builtin(grasp::robot::Side::Left);
+    grasp::run::sim_backend::SimHandArm::new(&robot, object, sim_cfg, cfg)
+        .context("building the simulated robot")
+}
+
+/// Calibrates the simulated fingertips: `still` readings 20 ms apart, then each
+/// fingertip pressed with a known force (`press_n` newtons, `presses` readings each).
+pub fn calibrate_sim(
+    arm: &mut grasp::run::sim_backend::SimHandArm,
+    still: usize,
+    fraction: f64,
+    press_n: f64,
+    presses: usize,
+) -> anyhow::Result<grasp::run::calibrate::CalibrationReport> {
+    grasp::run::calibrate::calibrate_tactile(arm, still, 0.02, fraction, |a, finger| {
+        (0..presses)
+            .map(|_| a.read_pressed(finger, press_n).map_err(Into::into))
+            .collect()
+    })
+    .context("calibrating the simulated fingertips")
+}
+
+/// The error of `--backend ros` in a build without the `ros` feature.
+pub const NO_ROS: &str =
+    "the ros backend is not part of this build: rebuild with `cargo build --release --features ros`";
+
+/// Connects to the robot's rosbridge.
+#[cfg(feature = "ros")]
+pub fn connect_ros(url: &str) -> anyhow::Result<grasp::hardware::ros::RosHandArm> {
+    grasp::hardware::ros::RosHandArm::connect(url, grasp::hardware::ros::RosConfig::default())
+        .with_context(|| format!("connecting to rosbridge at {url}"))
 }
 
 #[cfg(test)]

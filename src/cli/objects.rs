@@ -68,13 +68,6 @@ enum ObjectsCmd {
     },
 }
 
-/// Resolves an `--objects` argument and builds its objects (hulls from the cache). Shared
-/// by every command that takes `--objects`.
-pub fn load_objects(arg: &str) -> anyhow::Result<Vec<Object>> {
-    let ctx = BuildContext::from_env();
-    sets::load_objects(arg, &ctx).with_context(|| format!("cannot load objects `{arg}`"))
-}
-
 /// Finds object `name` in set `set`; a `name` that is an existing mesh file stands alone.
 /// A stream object (`proc-<seed>-<index>`) is found in the sets `all` (the default) and
 /// `procedural` (the endless stream); another set must hold it.
@@ -159,7 +152,7 @@ pub fn run(args: ObjectsArgs, global: &Global) -> anyhow::Result<()> {
                 if count.is_some() || stream_seed.is_some() {
                     bail!("--count and --stream-seed apply to --set procedural only");
                 }
-                load_objects(&set)?
+                super::load_objects(&set)?
             };
             let rows: Vec<Summary> = objects
                 .iter()

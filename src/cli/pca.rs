@@ -167,7 +167,7 @@ fn collect(a: CollectArgs, g: &Global) -> Result<()> {
         ProgressBar::hidden()
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(super::rollout::threads(a.threads)?)
+        .num_threads(super::threads(a.threads)?)
         .build()
         .context("cannot start the worker threads")?;
     let t0 = std::time::Instant::now();

@@ -8,14 +8,12 @@ use grasp::eval::record::{
     finish, record_agent_episode, record_baseline_episode, write_recording, RecordingEntry,
 };
 use grasp::robot::{Robot, Side};
-use grasp::sim::ObjectSpec;
-use grasp::synergy::SynergyModel;
 use grasp::util::signal;
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::Global;
+use super::{load_synergy, sim_objects, threads, Global};
 
 /// Run episodes of a baseline or a random agent and print each outcome and a summary.
 #[derive(Debug, Args)]
@@ -49,40 +47,6 @@ pub struct RolloutArgs {
     pub threads: Option<usize>,
     #[command(flatten)]
     pub rec: super::RecordArgs,
-}
-
-/// Loads the synergy model (shipped one by default) with `n` components.
-pub fn load_synergy(path: Option<&PathBuf>, n: usize) -> Result<SynergyModel> {
-    let model = match path {
-        Some(p) => SynergyModel::load(p)
-            .with_context(|| format!("loading synergy model {}", p.display()))?,
-        None => grasp::synergy::default_model(),
-    };
-    model
-        .truncated(n)
-        .with_context(|| format!("using {n} synergy components"))
-}
-
-/// Resolves `--objects` into the simulator's object descriptions.
-pub fn sim_objects(arg: &str) -> Result<Vec<(String, ObjectSpec)>> {
-    let objects = super::objects::load_objects(arg)?;
-    // Every object is checked before any episode runs, naming the set (the manifest, the
-    // folder) and the object.
-    objects
-        .iter()
-        .map(|o| {
-            let spec = ObjectSpec::simulable(o)
-                .map_err(|e| anyhow::anyhow!(e))
-                .with_context(|| format!("objects `{arg}`"))?;
-            Ok((o.name.clone(), spec))
-        })
-        .collect()
-}
-
-/// Number of worker threads: the `--threads` flag (checked by the one rule of
-/// [`grasp::util::threads`]) or the available cores.
-pub fn threads(flag: Option<usize>) -> Result<usize> {
-    grasp::util::threads::resolve(flag).map_err(|m| anyhow::anyhow!("--threads {m}"))
 }
 
 /// One episode's result: its index, its summary and its recording (with `--record`).

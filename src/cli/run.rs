@@ -2,35 +2,25 @@
 //! (Sec. V-B): plan a two-finger grasp, map it to the hand, stage 1, the policy, the lift.
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use grasp::hardware::calibration::{TactileCalibration, DEFAULT_THRESHOLD_FRACTION};
 use grasp::hardware::log::AttemptLog;
 use grasp::hardware::pointcloud::{write_pcd, PcdData, PointCloud};
 use grasp::hardware::safety::SafeHandArm;
 use grasp::hardware::HandArm;
 use grasp::robot::{Robot, Side};
-use grasp::run::calibrate::{calibrate_tactile, CalibrationReport};
 use grasp::run::pipeline::{
     load_grasp_file, plan_grasp_avoiding, run_attempt, AttemptOutcome, GraspFile, GraspPlan,
     GraspSource, PipelineConfig, PolicyRunner,
 };
-use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
-use grasp::sim::{ObjectSpec, SimConfig};
+use grasp::run::sim_backend::CameraConfig;
+use grasp::sim::SimConfig;
 use grasp::util::assets;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use super::Global;
-
-/// Which hand-arm system to drive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Backend {
-    /// The simulator with a raw-sensor model.
-    Sim,
-    /// The Shadow hand's ROS 1 driver and the UR10e through rosbridge (feature `ros`).
-    Ros,
-}
+use super::{calibrate_sim, sim_backend, sim_config, sim_object, Backend, Global, NO_ROS};
 
 /// Run a grasp attempt of a trained policy on the simulated or the real robot (with
 /// --attempts, more after a failed lift: sim backend).
@@ -118,61 +108,6 @@ pub struct RunArgs {
     /// the next best grasp that was not tried yet is planned, as `grasp eval --attempts`.
     #[arg(long, default_value_t = 1)]
     pub attempts: usize,
-}
-
-/// The object for the sim backend: `box`, `cylinder` or one library object.
-pub fn sim_object(name: &str) -> Result<ObjectSpec> {
-    match name.trim() {
-        "box" => return Ok(ObjectSpec::default_box()),
-        "cylinder" => return Ok(ObjectSpec::default_cylinder()),
-        _ => {}
-    }
-    let mut objs = super::rollout::sim_objects(name)?;
-    if objs.len() != 1 {
-        bail!(
-            "--object `{name}` holds {} objects; it must name exactly one",
-            objs.len()
-        );
-    }
-    Ok(objs.remove(0).1)
-}
-
-pub use super::sim_config;
-
-/// The simulated hand-arm with the raw-sensor model seeded by `seed`.
-pub fn sim_backend(object: ObjectSpec, sim_cfg: SimConfig, seed: u64) -> Result<SimHandArm> {
-    let mut cfg = SimBackendConfig::default();
-    cfg.raw.seed = seed;
-    let robot = Robot::builtin(Side::Left);
-    SimHandArm::new(&robot, object, sim_cfg, cfg).context("building the simulated robot")
-}
-
-/// Calibrates the simulated fingertips: `still` readings 20 ms apart, then each
-/// fingertip pressed with a known force (`press_n` newtons, `presses` readings each).
-pub fn calibrate_sim(
-    arm: &mut SimHandArm,
-    still: usize,
-    fraction: f64,
-    press_n: f64,
-    presses: usize,
-) -> Result<CalibrationReport> {
-    calibrate_tactile(arm, still, 0.02, fraction, |a, finger| {
-        (0..presses)
-            .map(|_| a.read_pressed(finger, press_n).map_err(Into::into))
-            .collect()
-    })
-    .context("calibrating the simulated fingertips")
-}
-
-/// The error of `--backend ros` in a build without the `ros` feature.
-pub const NO_ROS: &str =
-    "the ros backend is not part of this build: rebuild with `cargo build --release --features ros`";
-
-/// Connects to the robot's rosbridge.
-#[cfg(feature = "ros")]
-pub fn connect_ros(url: &str) -> Result<grasp::hardware::ros::RosHandArm> {
-    grasp::hardware::ros::RosHandArm::connect(url, grasp::hardware::ros::RosConfig::default())
-        .with_context(|| format!("connecting to rosbridge at {url}"))
 }
 
 fn pipeline_config(a: &RunArgs, sim: Option<&SimConfig>) -> Result<PipelineConfig> {
@@ -375,7 +310,7 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
             policy.set_object_cloud(object_cloud(&source));
             #[cfg(feature = "ros")]
             {
-                let mut arm = safe_arm(connect_ros(&a.ros_url)?, &robot, &cfg)?;
+                let mut arm = safe_arm(super::connect_ros(&a.ros_url)?, &robot, &cfg)?;
                 let mut log = AttemptLog::open(&a.log)?;
                 let at = Attempt {
                     plan: &plan,
