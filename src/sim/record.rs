@@ -254,7 +254,7 @@ impl HandSim {
             object: [0, 1, 2, 3, 4, 5, 6].map(|k| round(o[k], 1e5)),
             tactile: s.tactile,
             torque_level: s.torque_level,
-            tip_force: self.tip_forces().map(|f| round(f as f32, 1e3)),
+            tip_force: s.tip_force.map(|f| round(f as f32, 1e3)),
             hand_force: round(self.hand_object_force() as f32, 1e3),
             table_force: round(self.table_object_force() as f32, 1e3),
             lift: if lift.is_finite() {
