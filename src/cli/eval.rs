@@ -10,7 +10,7 @@ use grasp::env::obs::Modality;
 use grasp::eval::conditions::EvalConditions;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::rank::MAX_RANK_TOP;
-use grasp::eval::record::{self, agent_file_name, RecordOptions};
+use grasp::eval::record::{agent_file_name, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
     read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats, RankedPregrasp,
@@ -431,18 +431,7 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
             .iter()
             .flat_map(|r| r.record_errors.iter().cloned())
             .collect();
-        let done = record::finish(dir, &entries, &errors)
-            .with_context(|| format!("writing the index of {}", dir.display()))?;
-        if !g.quiet {
-            eprintln!(
-                "recorded {} episodes: open {}",
-                done.episodes,
-                done.index.display()
-            );
-        }
-        if let Some(lost) = done.lost {
-            bail!(lost);
-        }
+        super::finish_recordings(dir, &entries, &errors, g.quiet)?;
     }
     if interrupted {
         use std::io::Write;

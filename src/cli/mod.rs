@@ -301,6 +301,30 @@ pub fn sim_config(path: Option<&std::path::PathBuf>) -> anyhow::Result<grasp::si
 // The helpers several commands share (the objects, synergy model, thread count and
 // simulated robot of a command line), here rather than in one command's file.
 
+/// Writes the index of a `--record` folder and says so on stderr (unless `quiet`); the
+/// episodes that could not be written (`errors`) end the command with an error after the
+/// results were printed. Shared by `grasp eval` and `grasp rollout`.
+pub fn finish_recordings(
+    dir: &std::path::Path,
+    entries: &[grasp::eval::record::RecordingEntry],
+    errors: &[String],
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let done = grasp::eval::record::finish(dir, entries, errors)
+        .with_context(|| format!("writing the index of {}", dir.display()))?;
+    if !quiet {
+        eprintln!(
+            "recorded {} episodes: open {}",
+            done.episodes,
+            done.index.display()
+        );
+    }
+    match done.lost {
+        Some(lost) => Err(anyhow::anyhow!(lost)),
+        None => Ok(()),
+    }
+}
+
 /// Resolves an `--objects` argument and builds its objects (hulls from the cache). Shared
 /// by every command that takes `--objects`.
 pub fn load_objects(arg: &str) -> anyhow::Result<Vec<grasp::objects::Object>> {

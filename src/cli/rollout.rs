@@ -5,7 +5,7 @@ use clap::Args;
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{run_episode, EnvConfig, EpisodeSummary, GraspEnv, RandomAgent};
 use grasp::eval::record::{
-    finish, record_agent_episode, record_baseline_episode, write_recording, RecordingEntry,
+    record_agent_episode, record_baseline_episode, write_recording, RecordingEntry,
 };
 use grasp::robot::{Robot, Side};
 use grasp::util::signal;
@@ -77,18 +77,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     if let Some(dir) = &a.rec.record {
         let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
         let errors = record_errors.into_inner().unwrap_or_default();
-        let done = finish(dir, &entries, &errors)
-            .with_context(|| format!("writing the index of {}", dir.display()))?;
-        if !g.quiet {
-            eprintln!(
-                "recorded {} episodes: open {}",
-                done.episodes,
-                done.index.display()
-            );
-        }
-        if let Some(lost) = done.lost {
-            bail!(lost);
-        }
+        super::finish_recordings(dir, &entries, &errors, g.quiet)?;
     }
     if interrupted {
         use std::io::Write;
