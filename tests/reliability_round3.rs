@@ -3,7 +3,6 @@
 //! the build before its fix.
 
 use std::path::Path;
-use std::process::Output;
 
 #[path = "common/cli.rs"]
 mod cli;
@@ -33,21 +32,6 @@ fn a_cloud_declaring_billions_of_points_is_refused() {
         let o = grasp(&["run", "--backend", "sim", "--cloud", s(&p)]);
         assert_fails(&o, &[name, want]);
     }
-}
-
-/// `grasp eval` of baseline 2 on one trial of one object, with `extra` flags.
-fn eval_one(extra: &[&str]) -> Output {
-    let mut a = vec![
-        "eval",
-        "--policy",
-        "baseline2",
-        "--objects",
-        "box_sugar",
-        "--trials",
-        "1",
-    ];
-    a.extend(extra);
-    grasp(&a)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {

@@ -30,17 +30,7 @@ fn perturbation_ranges_left_disabled_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("light.toml");
     std::fs::write(&p, "[randomization]\nfriction = [0.1, 0.2]\n").unwrap();
-    let o = grasp(&[
-        "eval",
-        "--policy",
-        "baseline2",
-        "--objects",
-        "box_sugar",
-        "--trials",
-        "1",
-        "--perturb",
-        s(&p),
-    ]);
+    let o = eval_one(&["--perturb", s(&p)]);
     assert_fails(
         &o,
         &[

@@ -106,26 +106,13 @@ fn outputs_never_replace_inputs_or_each_other() {
     assert_fails(&o, &["--out", "overwrite"]);
     assert_eq!(std::fs::read(&mesh).unwrap(), before);
 
-    let eval = |extra: &[&str]| {
-        let mut a = vec![
-            "eval",
-            "--policy",
-            "baseline2",
-            "--objects",
-            "box_sugar",
-            "--trials",
-            "1",
-        ];
-        a.extend_from_slice(extra);
-        grasp(&a)
-    };
     let svg = d.join("x.svg");
-    let o = eval(&["--csv", s(&svg), "--plot", s(&svg)]);
+    let o = eval_one(&["--csv", s(&svg), "--plot", s(&svg)]);
     assert_fails(&o, &["--csv", "--plot", "same file"]);
     assert!(!stderr(&o).contains("evaluating"), "{}", stderr(&o));
     let rec = d.join("rec");
     let index = rec.join("index.html");
-    let o = eval(&["--csv", s(&index), "--record", s(&rec)]);
+    let o = eval_one(&["--csv", s(&index), "--record", s(&rec)]);
     assert_fails(&o, &["--csv", "inside the folder of --record"]);
     assert!(!rec.exists());
     // A mesh of an --objects folder is an input too.
@@ -377,17 +364,7 @@ fn a_recording_that_cannot_be_written_keeps_the_results() {
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("rec");
     std::fs::create_dir_all(rec.join("Baseline_2_box_sugar_000.json")).unwrap();
-    let o = grasp(&[
-        "eval",
-        "--policy",
-        "baseline2",
-        "--objects",
-        "box_sugar",
-        "--trials",
-        "1",
-        "--record",
-        s(&rec),
-    ]);
+    let o = eval_one(&["--record", s(&rec)]);
     assert_fails(&o, &["episodes could not be recorded", "the results above"]);
     assert!(stdout(&o).contains("mean success"), "{}", stdout(&o));
     assert!(rec.join("index.html").is_file());

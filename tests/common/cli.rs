@@ -44,6 +44,21 @@ pub fn assert_fails_with(o: &Output, code: i32, needles: &[&str]) {
     }
 }
 
+/// `grasp eval` of baseline 2 on one trial of one object, with `extra` flags.
+pub fn eval_one(extra: &[&str]) -> Output {
+    let mut a = vec![
+        "eval",
+        "--policy",
+        "baseline2",
+        "--objects",
+        "box_sugar",
+        "--trials",
+        "1",
+    ];
+    a.extend(extra);
+    grasp(&a)
+}
+
 /// A path as the `&str` an argument list takes.
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
