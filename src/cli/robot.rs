@@ -33,6 +33,28 @@ pub enum RobotCommand {
     /// UR10e inverse kinematics for a flange pose (base frame, metres and radians).
     #[command(after_help = "Example:\n  grasp robot ik --xyz 0.6 0.2 0.4 --rpy 3.1416 0 0")]
     Ik(IkArgs),
+    /// Write the simulated scene (hand on its mount, table, object) as MuJoCo MJCF, as the
+    /// MuJoCo backend simulates it, to open in MuJoCo's own viewer.
+    #[command(
+        after_help = "Examples:\n  grasp robot mjcf --object box_gelatin --out scene.xml\n  python -m mujoco.viewer --mjcf scene.xml\n\nThe hand hangs open 15 cm above the object's top (the start of `grasp run`); the\nengine settings are configs/mujoco.toml's unless --mujoco-settings names a file."
+    )]
+    Mjcf(MjcfArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct MjcfArgs {
+    /// Object on the table: box, cylinder, a library object name, or `none`.
+    #[arg(long, default_value = "box_gelatin")]
+    pub object: String,
+    /// Write to this file instead of stdout.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Simulator config (TOML): gains, frictions, gravity; built-in defaults when absent.
+    #[arg(long)]
+    pub sim_config: Option<PathBuf>,
+    /// MuJoCo engine settings (TOML); configs/mujoco.toml's when absent.
+    #[arg(long)]
+    pub mujoco_settings: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -82,7 +104,37 @@ pub fn run(args: RobotArgs, g: &Global) -> Result<()> {
         RobotCommand::Show(a) => show(a, g),
         RobotCommand::Urdf(a) => urdf(a),
         RobotCommand::Ik(a) => ik(a, g),
+        RobotCommand::Mjcf(a) => mjcf(a),
     }
+}
+
+fn mjcf(a: MjcfArgs) -> Result<()> {
+    use grasp::run::mjcf::{scene_xml, MujocoSettings};
+    let robot = Robot::builtin(Side::Left);
+    let sim = super::sim_config(a.sim_config.as_ref())?;
+    let settings = match &a.mujoco_settings {
+        Some(p) => {
+            MujocoSettings::load(p).with_context(|| format!("--mujoco-settings {}", p.display()))?
+        }
+        None => MujocoSettings::builtin(),
+    };
+    let object = match a.object.trim() {
+        "none" => None,
+        name => Some(super::sim_object(name)?),
+    };
+    let top = object.as_ref().map_or(0.0, |o| 2.0 * o.rest_height());
+    let open = Posture::Open.angles();
+    let grasp_point = nalgebra::Point3::new(0.0, 0.0, top + 0.15);
+    let mount = grasp::sim::placement::hand_root_pose(&robot, &grasp_point, 0.0, &open)
+        .context("placing the hand")?;
+    let xml = scene_xml(&robot, &mount, object.as_ref(), &sim, &settings)?;
+    match &a.out {
+        Some(p) => {
+            write_atomic(p, xml.as_bytes()).with_context(|| format!("writing {}", p.display()))?
+        }
+        None => print!("{xml}"),
+    }
+    Ok(())
 }
 
 fn load_posture(spec: &str) -> Result<[f64; 24]> {

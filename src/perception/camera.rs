@@ -51,22 +51,34 @@ pub fn camera_cloud(
     cam: &CameraConfig,
     seed: u64,
 ) -> Result<Vec<Point3<f64>>, CloudError> {
+    let [px, py, pz, qx, qy, qz, qw] = sim.object_pose_raw();
+    let body = Pose::from_parts(
+        rapier3d::math::Vector::new(px, py, pz),
+        rapier3d::math::Rotation::from_xyzw(qx, qy, qz, qw),
+    );
+    camera_cloud_at(sim.object(), &body, cam, seed)
+}
+
+/// The point cloud the depth cameras of `cam` see of `object` with its body at `body`
+/// (world frame): [`camera_cloud`] for an object another engine moved.
+pub fn camera_cloud_at(
+    object: &crate::sim::ObjectSpec,
+    body: &Pose,
+    cam: &CameraConfig,
+    seed: u64,
+) -> Result<Vec<Point3<f64>>, CloudError> {
     if cam.positions.is_empty() || cam.resolution < 2 {
         return Err(CloudError::BadParameter {
             name: "cameras",
             detail: "need at least one camera and a resolution of at least 2".into(),
         });
     }
-    let [px, py, pz, qx, qy, qz, qw] = sim.object_pose_raw();
-    let body = Pose::from_parts(
-        rapier3d::math::Vector::new(px, py, pz),
-        rapier3d::math::Rotation::from_xyzw(qx, qy, qz, qw),
-    );
-    let builder = sim.object().shape.collider();
-    let shape_pose = body * builder.position;
+    let builder = object.shape.collider();
+    let shape_pose = *body * builder.position;
     let shape = builder.shape;
-    let centre = Point3::new(f64::from(px), f64::from(py), f64::from(pz));
-    let h = sim.object().shape.half_extents();
+    let t = body.translation;
+    let centre = Point3::new(f64::from(t.x), f64::from(t.y), f64::from(t.z));
+    let h = object.shape.half_extents();
     let radius = 1.1 * Vector3::from(h).norm();
     let mut cloud = Vec::new();
     for (k, rel) in cam.positions.iter().enumerate() {

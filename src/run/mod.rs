@@ -20,8 +20,13 @@ pub mod calibrate;
 /// policy"); Python's `grasp_rl.Policy.shipped()` embeds the same one. A path relative to
 /// the repository, found from any working directory by [`crate::util::assets::shipped`].
 pub const DEFAULT_POLICY: &str = "assets/policies/fig5_gru_m3_pca8";
+pub mod mjcf;
+#[cfg(feature = "mujoco")]
+pub mod mujoco_backend;
 pub mod pipeline;
 pub mod plan;
+#[cfg(feature = "mujoco")]
+pub mod raw_model;
 pub mod sim_backend;
 
 use crate::hardware::calibration::CalibrationError;
