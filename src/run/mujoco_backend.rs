@@ -46,7 +46,8 @@ use crate::robot::grasp_map::hand_grasp_frame;
 use crate::robot::joints::{actuator_sums, COUPLED_FINGERS, HAND_JOINTS};
 use crate::robot::{ur10e, Posture, Robot};
 use crate::sim::placement::hand_root_pose;
-use crate::sim::{ObjectShape, ObjectSpec, SimConfig};
+use crate::sim::world::finger_grip;
+use crate::sim::{LiftOutcome, ObjectShape, ObjectSpec, SimConfig};
 use mujoco_rs::prelude::*;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::parry::bounding_volume::BoundingVolume;
@@ -86,7 +87,7 @@ pub struct MujocoHandArm {
     lift_target: f64,
     clock_base: f64,
     extra_force: [f64; N_TACTILE],
-    lift: Option<bool>,
+    lift: Option<LiftOutcome>,
     failure: Option<String>,
     object_start: Vector3<f64>,
     kept_object: Option<Isometry3<f64>>,
@@ -268,9 +269,7 @@ impl MujocoHandArm {
         let (q, _) = self.joint_state();
         let (tip, _) = self.contact_forces();
         let tip: [f64; N_TACTILE] = std::array::from_fn(|k| tip[k] + self.extra_force[k]);
-        let force = self.data.actuator_force();
-        let e24: [f64; N_HAND_JOINTS] = std::array::from_fn(|n| force[self.ids.act[n]]);
-        let effort = actuator_sums(&e24);
+        let effort = actuator_sums(&self.joint_efforts());
         let t = self.now();
         self.raw.reading(t, &q, &tip, &effort)
     }
@@ -495,12 +494,20 @@ impl MujocoHandArm {
         ))
     }
 
-    /// Raises the mount by `lift.height` along the smoothstep ramp, holds, and judges.
-    fn lift_and_judge(&mut self) -> Result<bool, HwError> {
+    /// The 24 joints' actuator forces (N m): the clamped PD law.
+    fn joint_efforts(&self) -> [f64; N_HAND_JOINTS] {
+        let force = self.data.actuator_force();
+        std::array::from_fn(|n| force[self.ids.act[n]])
+    }
+
+    /// Raises the mount by `lift.height` along the smoothstep ramp, holds, and judges as
+    /// [`crate::sim::HandSim::lift_and_judge`] does (without its early stop).
+    fn lift_and_judge(&mut self) -> Result<LiftOutcome, HwError> {
         let l = self.sim_cfg.lift;
-        let dt = self.dt;
-        let ramp = (l.ramp_time / dt).round().max(1.0) as usize;
-        let hold = (l.hold_time / dt).round() as usize;
+        let ramp = (l.ramp_time / self.dt).round().max(1.0) as usize;
+        let hold = (l.hold_time / self.dt).round() as usize;
+        let start = self.object_pose().rotation;
+        let (mut grip_sum, mut grip_steps) = (0.0, 0usize);
         for k in 0..ramp + hold {
             let s = ((k + 1) as f64 / ramp as f64).min(1.0);
             self.lift_target = l.height * s * s * (3.0 - 2.0 * s);
@@ -508,10 +515,19 @@ impl MujocoHandArm {
             if !self.step() {
                 return Err(self.physics_err());
             }
+            grip_sum += finger_grip(&self.joint_efforts());
+            grip_steps += 1;
         }
         let lowest = self.object_aabb().0.z;
-        let (_, hand) = self.contact_forces();
-        Ok(lowest >= l.success_height && hand > 0.0)
+        let in_contact = self.contact_forces().1 > 0.0;
+        Ok(LiftOutcome {
+            success: lowest >= l.success_height && in_contact,
+            object_lowest_z: lowest,
+            in_contact,
+            object_turn: start.angle_to(&self.object_pose().rotation),
+            grip_effort: grip_sum / grip_steps.max(1) as f64,
+            failure: None,
+        })
     }
 
     /// Prepares a second attempt after a failed one, as the Rapier backend does: opens the
@@ -680,8 +696,8 @@ impl HandArm for MujocoHandArm {
                         ),
                     ));
                 }
-                let held = self.lift_and_judge()?;
-                self.lift = Some(held);
+                let out = self.lift_and_judge()?;
+                self.lift = Some(out);
                 Ok(())
             }
         }
@@ -712,7 +728,7 @@ impl HandArm for MujocoHandArm {
     }
 
     fn lift_outcome(&self) -> Option<bool> {
-        self.lift
+        self.lift.as_ref().map(|l| l.success)
     }
 }
 
