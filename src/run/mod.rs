@@ -17,6 +17,10 @@
 //!   point cloud, the hand mapping, UR10e IK) and the attempt (stage 1, the policy, the
 //!   lift), logged step by step; the scripted baselines in place of stage 1 and the
 //!   policy ([`Controller`](pipeline::Controller)).
+//! - [`session`]: `grasp run` on a simulated backend: set-up, calibration, cameras and
+//!   the attempt-and-retry loop, generic over [`SimulatedArm`](simulated::SimulatedArm).
+//! - [`table`]: Table I through the robot path: agents times objects times trials, each
+//!   trial a session, judged by the backend and aggregated as `grasp eval` does.
 
 pub mod calibrate;
 
@@ -29,8 +33,10 @@ pub const DEFAULT_POLICY: &str = "assets/policies/fig5_gru_m3_pca8";
 pub mod pipeline;
 pub mod plan;
 pub mod raw_model;
+pub mod session;
 pub mod sim_backend;
 pub mod simulated;
+pub mod table;
 
 use crate::hardware::calibration::CalibrationError;
 use crate::hardware::log::LogError;
