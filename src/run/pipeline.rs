@@ -387,6 +387,10 @@ pub struct AttemptOutcome {
     pub log_lines: u64,
     /// Backend time at the end (s).
     pub time_s: f64,
+    /// The calibrated fingertip contacts (FF, MF, RF, LF, TH) of the last reading before
+    /// the lift (all off where the attempt did not lift); not in the JSON report.
+    #[serde(skip)]
+    pub contacts_at_lift: [bool; 5],
 }
 
 /// The mapped view of one reading.
@@ -654,6 +658,7 @@ fn attempt_body<B: HandArm>(
         clamped_commands: 0,
         log_lines: 0,
         time_s: 0.0,
+        contacts_at_lift: [false; 5],
     };
     if !lifted && env.at_max_steps == AtMaxSteps::Lift {
         // The policy was trained to lift at the step cap.
@@ -676,6 +681,7 @@ fn attempt_body<B: HandArm>(
         success,
         reason,
         judged_by: judged_by.into(),
+        contacts_at_lift: m.tactile,
         ..base_out
     })
 }
@@ -710,6 +716,7 @@ fn baseline_attempt<B: HandArm>(
         clamped_commands: 0,
         log_lines: 0,
         time_s: 0.0,
+        contacts_at_lift: m.tactile,
     })
 }
 

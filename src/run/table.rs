@@ -20,6 +20,13 @@
 //! failed trial counted as a physics failure, as `grasp eval` counts them; any other error
 //! of a trial (no grasp on the cloud, the arm cannot reach it) is a failed trial whose
 //! reason is kept in [`TableAgentResult::trial_errors`]. Neither stops the table.
+//!
+//! # What a trial records
+//! Success, lift and steps from the attempt's outcome (stage-2 policy steps; 1 for a
+//! baseline's lift, as `grasp eval` counts it), the lift's height, turn, grip and object
+//! in hand from the backend's [`SimulatedArm::lift_report`], the deepest contact from
+//! [`SimulatedArm::deepest_contact`], and the thumb's contact at the lift from the robot's
+//! CALIBRATED tactile reading (the simulator's own bit in `grasp eval`).
 
 use super::pipeline::{Controller, PipelineConfig, PolicyRunner};
 use super::session::{Session, SessionConfig, SessionError};
@@ -393,6 +400,9 @@ fn run_trial<A: SimulatedArm>(
                 };
                 summary.episode_return = f64::from(u8::from(summary.success));
                 summary.touched_in_stage1 = o.touched;
+                // The robot's calibrated thumb contact (the simulator's own tactile bit
+                // in `grasp eval`).
+                summary.thumb_contact_at_lift = o.lifted && o.contacts_at_lift[4];
                 if let (true, Some(l)) = (o.lifted, arm.lift_report()) {
                     summary.grip_effort = l.grip_effort;
                     summary.object_height = l.object_lowest_z;
