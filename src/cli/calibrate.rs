@@ -65,22 +65,21 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
         check_writable_file(&a.out)
             .map_err(|e| anyhow::anyhow!("--out {}: {}", a.out.display(), e.source))?;
     }
-    let report: CalibrationReport = match a.backend {
-        Backend::Sim => {
-            // A fingertip press is a few newtons; 1000 N bounds any plausible one.
-            if !(a.press_force.is_finite() && a.press_force > 0.0 && a.press_force <= 1000.0) {
-                bail!(
-                    "--press-force must be a number of newtons in (0, 1000], got {}",
-                    grasp::util::num::short(a.press_force)
-                );
-            }
-            let mut arm = sim_backend(
-                sim_object(&a.object)?,
-                sim_config(a.sim_config.as_ref())?,
-                g.seed.unwrap_or(0),
-            )?;
-            calibrate_sim(&mut arm, a.still, a.fraction, a.press_force, 5)?
+    if a.backend != Backend::Ros {
+        // A fingertip press is a few newtons; 1000 N bounds any plausible one.
+        if !(a.press_force.is_finite() && a.press_force > 0.0 && a.press_force <= 1000.0) {
+            bail!(
+                "--press-force must be a number of newtons in (0, 1000], got {}",
+                grasp::util::num::short(a.press_force)
+            );
         }
+    }
+    let report: CalibrationReport = match a.backend {
+        Backend::Sim => sim_calibrate::<grasp::run::sim_backend::SimHandArm>(&a, g)?,
+        #[cfg(feature = "mujoco")]
+        Backend::Mujoco => sim_calibrate::<grasp::run::mujoco_backend::MujocoHandArm>(&a, g)?,
+        #[cfg(not(feature = "mujoco"))]
+        Backend::Mujoco => bail!(super::NO_MUJOCO),
         Backend::Ros => ros_calibrate(&a)?,
     };
     report
@@ -108,6 +107,19 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
         println!("saved to {}", a.out.display());
     }
     Ok(())
+}
+
+/// The calibration of the simulated backend `A`.
+fn sim_calibrate<A: grasp::run::simulated::SimulatedArm>(
+    a: &CalibrateArgs,
+    g: &Global,
+) -> Result<CalibrationReport> {
+    let mut arm: A = sim_backend(
+        sim_object(&a.object)?,
+        sim_config(a.sim_config.as_ref())?,
+        g.seed.unwrap_or(0),
+    )?;
+    calibrate_sim(&mut arm, a.still, a.fraction, a.press_force, 5)
 }
 
 #[cfg(feature = "ros")]

@@ -13,8 +13,8 @@ use grasp::eval::rank::MAX_RANK_TOP;
 use grasp::eval::record::{agent_file_name, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
-    read_results, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats, RankedPregrasp,
-    TrialPlan,
+    read_results, text_table, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats,
+    RankedPregrasp, TrialPlan,
 };
 use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
@@ -940,33 +940,7 @@ fn print_results(a: &EvalArgs, g: &Global, results: &[AgentResult]) -> Result<()
             print!("\n{pairs}");
         }
     } else {
-        for r in results {
-            println!(
-                "{}: mean success {:.1} % (95 % CI {:.1}-{:.1}), {:.2} steps per episode, {:.1} control steps/s, {} physics failures",
-                r.agent,
-                100.0 * r.mean_rate,
-                100.0 * r.ci95.0,
-                100.0 * r.ci95.1,
-                r.mean_steps,
-                r.control_steps_per_s,
-                r.physics_failures
-            );
-            for o in &r.objects {
-                let failures = match o.physics_failures {
-                    0 => String::new(),
-                    f => format!("  {f} physics failure{}", if f == 1 { "" } else { "s" }),
-                };
-                println!(
-                    "  {:<22} {:>3}/{:<3} {:>5.0} %  [{:>3.0}, {:>3.0}]{failures}",
-                    o.object,
-                    o.successes,
-                    o.trials,
-                    100.0 * o.rate,
-                    100.0 * o.ci95.0,
-                    100.0 * o.ci95.1
-                );
-            }
-        }
+        print!("{}", text_table(results));
         print!("{lift_lines}{physics_lines}{pairs}");
     }
     Ok(())

@@ -377,6 +377,19 @@ pub enum Backend {
     Sim,
     /// The Shadow hand's ROS 1 driver and the UR10e through rosbridge (feature `ros`).
     Ros,
+    /// MuJoCo at simulated time behind the same interface (feature `mujoco`).
+    Mujoco,
+}
+
+impl Backend {
+    /// The name as `--backend` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Sim => "sim",
+            Backend::Ros => "ros",
+            Backend::Mujoco => "mujoco",
+        }
+    }
 }
 
 /// The object for the sim backend: `box`, `cylinder` or one library object.
@@ -396,39 +409,39 @@ pub fn sim_object(name: &str) -> anyhow::Result<grasp::sim::ObjectSpec> {
     Ok(objs.remove(0).1)
 }
 
-/// The simulated hand-arm with the raw-sensor model seeded by `seed`.
-pub fn sim_backend(
+/// The simulated hand-arm `A` with the raw-sensor model seeded by `seed`.
+pub fn sim_backend<A: grasp::run::simulated::SimulatedArm>(
     object: grasp::sim::ObjectSpec,
     sim_cfg: grasp::sim::SimConfig,
     seed: u64,
-) -> anyhow::Result<grasp::run::sim_backend::SimHandArm> {
+) -> anyhow::Result<A> {
     let mut cfg = grasp::run::sim_backend::SimBackendConfig::default();
     cfg.raw.seed = seed;
     let robot = grasp::robot::Robot::builtin(grasp::robot::Side::Left);
-    grasp::run::sim_backend::SimHandArm::new(&robot, object, sim_cfg, cfg)
-        .context("building the simulated robot")
+    A::build(&robot, object, sim_cfg, cfg).context("building the simulated robot")
 }
 
-/// Calibrates the simulated fingertips: `still` readings 20 ms apart, then each
-/// fingertip pressed with a known force (`press_n` newtons, `presses` readings each).
-pub fn calibrate_sim(
-    arm: &mut grasp::run::sim_backend::SimHandArm,
+/// Calibrates the simulated fingertips ([`grasp::run::calibrate::calibrate_simulated`]):
+/// `still` readings 20 ms apart, then each fingertip pressed with a known force
+/// (`press_n` newtons, `presses` readings each).
+pub fn calibrate_sim<A: grasp::run::simulated::SimulatedArm>(
+    arm: &mut A,
     still: usize,
     fraction: f64,
     press_n: f64,
     presses: usize,
 ) -> anyhow::Result<grasp::run::calibrate::CalibrationReport> {
-    grasp::run::calibrate::calibrate_tactile(arm, still, 0.02, fraction, |a, finger| {
-        (0..presses)
-            .map(|_| a.read_pressed(finger, press_n).map_err(Into::into))
-            .collect()
-    })
-    .context("calibrating the simulated fingertips")
+    grasp::run::calibrate::calibrate_simulated(arm, still, fraction, press_n, presses)
+        .context("calibrating the simulated fingertips")
 }
 
 /// The error of `--backend ros` in a build without the `ros` feature.
 pub const NO_ROS: &str =
     "the ros backend is not part of this build: rebuild with `cargo build --release --features ros`";
+
+/// The error of `--backend mujoco` in a build without the `mujoco` feature.
+#[cfg_attr(feature = "mujoco", allow(dead_code))]
+pub const NO_MUJOCO: &str = "the mujoco backend is not part of this build: rebuild with `cargo build --release --features mujoco` (see docs/robot-hardware.md)";
 
 /// Connects to the robot's rosbridge.
 #[cfg(feature = "ros")]

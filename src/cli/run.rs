@@ -3,24 +3,32 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use grasp::hardware::calibration::{TactileCalibration, DEFAULT_THRESHOLD_FRACTION};
+use grasp::hardware::calibration::TactileCalibration;
 use grasp::hardware::log::AttemptLog;
 use grasp::hardware::pointcloud::{write_pcd, PcdData, PointCloud};
 use grasp::hardware::safety::SafeHandArm;
 use grasp::hardware::HandArm;
 use grasp::robot::{Robot, Side};
 use grasp::run::pipeline::{
-    load_grasp_file, plan_grasp_avoiding, run_attempt, AttemptOutcome, GraspFile, GraspPlan,
-    GraspSource, PipelineConfig, PolicyRunner,
+    load_grasp_file, AttemptOutcome, Controller, GraspFile, GraspPlan, GraspSource, PipelineConfig,
+    PolicyRunner,
 };
-use grasp::run::sim_backend::CameraConfig;
+use grasp::run::session::{
+    fit_to_simulator, object_cloud, plan_attempt, AttemptReport, Session, SessionConfig,
+};
+use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
+use grasp::run::simulated::SimulatedArm;
+use grasp::run::table::{run_table, TableAgent, TableConfig};
 use grasp::sim::SimConfig;
 use grasp::util::assets;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use super::{calibrate_sim, sim_backend, sim_config, sim_object, Backend, Global, NO_ROS};
+use super::{sim_config, sim_object, sim_objects, threads, Backend, Global, NO_ROS};
+
+/// The attempt log of a single run when `--log` is not given.
+const DEFAULT_LOG: &str = "attempt.jsonl";
 
 /// Run a grasp attempt of a trained policy on the simulated or the real robot (with
 /// --attempts, more after a failed lift: sim backend).
@@ -30,6 +38,7 @@ use super::{calibrate_sim, sim_backend, sim_config, sim_object, Backend, Global,
   grasp run --backend sim --object box_gelatin --cloud scan.pcd --log attempt.jsonl --json
   grasp run --backend sim --center 0,0,0.02 --closing 1,0,0 --calibration tactile.json
   grasp run --backend ros --ros-url ws://robot:9090 --grasp grasp.toml --calibration tactile.json
+  grasp run --backend sim --objects unseen --trials 10 --policy assets/policies/fig5_gru_m3_pca8,baseline1,baseline2 --json
 
 With the sim backend and no grasp or cloud, the cloud is what four simulated depth
 camera views (one from each side) see of the object (noisy, partial); --save-cloud
@@ -39,16 +48,27 @@ the cloud's narrowest horizontal extent. Without
 A grasp file is TOML or JSON: center = [x, y, z], closing = [x, y, z], and optionally
 approach = [x, y, z] (default [0, 0, -1]), world frame, metres. Every step is appended
 to the attempt log (JSON lines). The sim backend places the hand palm down only, so its
-grasps are made top-down.")]
+grasps are made top-down.
+
+With --objects (a simulated backend), the command makes Table I through the robot path:
+every agent of --policy (checkpoint folders, baseline1, baseline2) on --trials scenes of
+each object (scene t of object o seeded as `grasp eval` seeds it from --seed: the object's
+offset and yaw, the raw sensors' noise), each trial the whole pipeline on a fresh
+simulated robot (calibration, cameras, plan, attempt, lift) judged by the simulator. It
+prints per-object success with Wilson intervals as `grasp eval` does; --json has the shape
+of `grasp eval --json` (plus each agent's backend and the trials that ended in an error),
+so `grasp eval --from-json` reads it. Attempt logs are written only with --log (all trials
+into that file).")]
 pub struct RunArgs {
-    /// The robot: sim or ros.
+    /// The robot: sim, ros or mujoco.
     #[arg(long, value_enum, default_value = "sim")]
     pub backend: Backend,
     /// Checkpoint folder of the policy (default: the shipped policy that lifted the most
     /// validation objects from the pre-grasp, the placement `grasp run` plans; found from
-    /// any working directory, see docs/robot-hardware.md).
+    /// any working directory, see docs/robot-hardware.md). With --objects, a comma list
+    /// of agents: checkpoint folders, baseline1 and baseline2.
     #[arg(long, default_value = grasp::run::DEFAULT_POLICY)]
-    pub policy: PathBuf,
+    pub policy: String,
     /// Two-finger grasp file (TOML or JSON).
     #[arg(long, conflicts_with_all = ["cloud", "center"])]
     pub grasp: Option<PathBuf>,
@@ -88,9 +108,21 @@ pub struct RunArgs {
     /// Object in the simulator: box, cylinder or a library object name.
     #[arg(long, default_value = "box_gelatin")]
     pub object: String,
-    /// Attempt log (JSON lines, appended).
-    #[arg(long, default_value = "attempt.jsonl")]
-    pub log: PathBuf,
+    /// Table I through the robot path on this object set (a set name, a manifest or a
+    /// comma list of objects, as `grasp eval --objects`): every --policy agent on --trials
+    /// scenes of each object (simulated backends).
+    #[arg(long, conflicts_with_all = ["object", "grasp", "cloud", "center", "save_cloud"])]
+    pub objects: Option<String>,
+    /// With --objects: trials per object.
+    #[arg(long, default_value_t = 10, requires = "objects")]
+    pub trials: usize,
+    /// With --objects: worker threads (default: available cores).
+    #[arg(long, requires = "objects")]
+    pub threads: Option<usize>,
+    /// Attempt log (JSON lines, appended; default attempt.jsonl). With --objects, every
+    /// trial's attempt is appended to it, and none is written without it.
+    #[arg(long)]
+    pub log: Option<PathBuf>,
     /// Pipeline config (TOML, see `PipelineConfig`); defaults when absent.
     #[arg(long)]
     pub config: Option<PathBuf>,
@@ -119,10 +151,7 @@ fn pipeline_config(a: &RunArgs, sim: Option<&SimConfig>) -> Result<PipelineConfi
     if let Some(s) = sim {
         // The simulator's hand goes palm down only, acts for its control period and
         // lifts as configured.
-        cfg.top_down_only = true;
-        cfg.control_period_s = s.control_period;
-        cfg.lift_height_m = s.lift.height;
-        cfg.lift_duration_s = s.lift.ramp_time + s.lift.hold_time;
+        fit_to_simulator(&mut cfg, s);
     }
     cfg.validate().with_context(|| match &a.config {
         Some(p) => format!("pipeline config {}", p.display()),
@@ -178,12 +207,17 @@ fn save_cloud(path: &Path, source: &GraspSource) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a `--log` or `--save-cloud` that is an input (the policy's files, `--grasp`,
-/// `--cloud`, `--calibration`, `--config`, `--sim-config`) or the other output.
-fn check_overlaps(a: &RunArgs) -> Result<()> {
+/// Refuses a `--log` or `--save-cloud` that is an input (the policies' files, `--grasp`,
+/// `--cloud`, `--calibration`, `--config`, `--sim-config`, the objects' files) or the
+/// other output.
+fn check_overlaps(a: &RunArgs, policies: &[PathBuf], log: Option<&Path>) -> Result<()> {
     use grasp::util::fsx::{check_outputs, Named};
-    let ckpt = super::checkpoint_files(&a.policy);
-    let mut inputs: Vec<Named> = ckpt.iter().map(|p| Named::new("--policy", p)).collect();
+    let mut inputs: Vec<Named> = Vec::new();
+    let ckpt: Vec<PathBuf> = policies
+        .iter()
+        .flat_map(|p| super::checkpoint_files(p))
+        .collect();
+    inputs.extend(ckpt.iter().map(|p| Named::new("--policy", p)));
     for (flag, p) in [
         ("--grasp", &a.grasp),
         ("--cloud", &a.cloud),
@@ -195,9 +229,16 @@ fn check_overlaps(a: &RunArgs) -> Result<()> {
             inputs.push(Named::new(flag, p));
         }
     }
-    let objects = super::object_files(&a.object);
-    inputs.extend(objects.iter().map(|p| Named::new("--object", p)));
-    let mut outputs = vec![Named::new("--log", &a.log)];
+    let (flag, arg) = match &a.objects {
+        Some(o) => ("--objects", o.as_str()),
+        None => ("--object", a.object.as_str()),
+    };
+    let objects = super::object_files(arg);
+    inputs.extend(objects.iter().map(|p| Named::new(flag, p)));
+    let mut outputs = Vec::new();
+    if let Some(p) = log {
+        outputs.push(Named::new("--log", p));
+    }
     if let Some(p) = &a.save_cloud {
         outputs.push(Named::new("--save-cloud", p));
     }
@@ -207,10 +248,24 @@ fn check_overlaps(a: &RunArgs) -> Result<()> {
 
 pub fn run(a: RunArgs, g: &Global) -> Result<()> {
     super::check_attempts(a.attempts, "grasp attempts on the object")?;
-    check_overlaps(&a)?;
+    if a.objects.is_some() {
+        return match a.backend {
+            Backend::Sim => table::<SimHandArm>(&a, g),
+            #[cfg(feature = "mujoco")]
+            Backend::Mujoco => table::<grasp::run::mujoco_backend::MujocoHandArm>(&a, g),
+            #[cfg(not(feature = "mujoco"))]
+            Backend::Mujoco => bail!(super::NO_MUJOCO),
+            Backend::Ros => bail!(
+                "--objects runs every trial on a simulated robot: use --backend sim or mujoco"
+            ),
+        };
+    }
+    let log = a.log.clone().unwrap_or_else(|| PathBuf::from(DEFAULT_LOG));
+    let policy_arg = PathBuf::from(&a.policy);
+    check_overlaps(&a, std::slice::from_ref(&policy_arg), Some(&log))?;
     let seed = g.seed.unwrap_or(0);
     let robot = Robot::builtin(Side::Left);
-    let policy_dir = assets::default_or_given(&a.policy, grasp::run::DEFAULT_POLICY, "--policy")?;
+    let policy_dir = assets::default_or_given(&policy_arg, grasp::run::DEFAULT_POLICY, "--policy")?;
     let mut policy = PolicyRunner::load(&policy_dir)
         .with_context(|| format!("loading policy {}", policy_dir.display()))?;
     let calibration = match &a.calibration {
@@ -221,70 +276,21 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
     if let Some(s) = &source {
         grasp::run::plan::check_source(s)?;
     }
+    let one = One {
+        a: &a,
+        g,
+        robot: &robot,
+        log: &log,
+        seed,
+    };
     match a.backend {
-        Backend::Sim => {
-            let sim_cfg = sim_config(a.sim_config.as_ref())?;
-            let cfg = pipeline_config(&a, Some(&sim_cfg))?;
-            let mut arm = sim_backend(sim_object(&a.object)?, sim_cfg, seed)?;
-            let (calibration, calibrated_now) = match calibration {
-                Some(c) => (c, false),
-                None => (
-                    calibrate_sim(&mut arm, 10, DEFAULT_THRESHOLD_FRACTION, 10.0, 5)?.calibration,
-                    true,
-                ),
-            };
-            if a.attempts > 1 && source.is_some() {
-                bail!(
-                    "--attempts {} plans each attempt on the simulated cameras' cloud: drop \
-                     --grasp, --cloud and --center",
-                    a.attempts
-                );
-            }
-            let cameras = CameraConfig::default();
-            let mut source = match source {
-                Some(s) => s,
-                None => GraspSource::Cloud(
-                    arm.camera_cloud(&cameras, seed)
-                        .context("simulating the depth cameras")?,
-                ),
-            };
-            if let Some(p) = &a.save_cloud {
-                save_cloud(p, &source)?;
-            }
-            let mut arm = safe_arm(arm, &robot, &cfg)?;
-            let mut log = AttemptLog::open(&a.log)?;
-            let mut tried: Vec<GraspPlan> = Vec::new();
-            let mut reports = Vec::new();
-            for k in 0..a.attempts {
-                if k > 0 {
-                    if let Err(e) = arm.backend_mut().settle_for_retry() {
-                        if !g.quiet {
-                            eprintln!("no attempt {}: {e}", k + 1);
-                        }
-                        break;
-                    }
-                    let s = grasp::eval::trial::attempt_seed(seed, k);
-                    let cloud = arm.backend().camera_cloud(&cameras, s);
-                    source = GraspSource::Cloud(cloud.context("simulating the depth cameras")?);
-                }
-                let plan = plan(&robot, &source, &cfg, &policy, seed, &tried)?;
-                policy.set_object_cloud(object_cloud(&source));
-                let at = Attempt {
-                    plan: &plan,
-                    calibration: &calibration,
-                    cfg: &cfg,
-                    calibrated_now,
-                    number: (a.attempts > 1).then_some(k + 1),
-                };
-                let (out, report) = attempt(&mut arm, &robot, &at, &mut policy, &mut log, &a, g)?;
-                reports.push(report);
-                tried.push(plan);
-                if out.success {
-                    break;
-                }
-            }
-            print_reports(reports, g)
+        Backend::Sim => one.sim::<SimHandArm>(&mut policy, calibration, source),
+        #[cfg(feature = "mujoco")]
+        Backend::Mujoco => {
+            one.sim::<grasp::run::mujoco_backend::MujocoHandArm>(&mut policy, calibration, source)
         }
+        #[cfg(not(feature = "mujoco"))]
+        Backend::Mujoco => bail!(super::NO_MUJOCO),
         Backend::Ros => {
             if !cfg!(feature = "ros") {
                 bail!(NO_ROS);
@@ -306,53 +312,186 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
                 );
             }
             let cfg = pipeline_config(&a, None)?;
-            let plan = plan(&robot, &source, &cfg, &policy, seed, &[])?;
+            let plan = plan_attempt(
+                &robot,
+                &source,
+                &cfg,
+                &Controller::Policy(&mut policy),
+                seed,
+                &[],
+            )?;
             policy.set_object_cloud(object_cloud(&source));
             #[cfg(feature = "ros")]
             {
                 let mut arm = safe_arm(super::connect_ros(&a.ros_url)?, &robot, &cfg)?;
-                let mut log = AttemptLog::open(&a.log)?;
-                let at = Attempt {
-                    plan: &plan,
-                    calibration: &calibration,
-                    cfg: &cfg,
-                    calibrated_now: false,
-                    number: None,
-                };
-                let (_, report) = attempt(&mut arm, &robot, &at, &mut policy, &mut log, &a, g)?;
+                let mut log = AttemptLog::open(&log)?;
+                let out = run_attempt(
+                    &mut arm,
+                    &robot,
+                    &plan,
+                    &mut policy,
+                    &calibration,
+                    &cfg,
+                    &mut log,
+                )
+                .context("grasp attempt failed")?;
+                let report = one.report(&plan, &out, false, None);
                 print_reports(vec![report], g)?;
             }
             #[cfg(not(feature = "ros"))]
-            let _ = (plan, calibration);
+            let _ = (plan, calibration, &one);
             Ok(())
         }
     }
 }
 
-/// The object's points of a cloud source (what an M3G policy measures its surface
-/// vectors against); none for a given grasp.
-fn object_cloud(source: &GraspSource) -> Option<Vec<nalgebra::Point3<f64>>> {
-    match source {
-        GraspSource::Cloud(c) => Some(c.clone()),
-        GraspSource::Given(_) => None,
+/// What one `grasp run` (no --objects) prints its attempts with.
+struct One<'a> {
+    a: &'a RunArgs,
+    g: &'a Global,
+    robot: &'a Robot,
+    log: &'a Path,
+    seed: u64,
+}
+
+impl One<'_> {
+    /// A session on the simulated backend `A`: the library's set-up, calibration,
+    /// cameras and attempts, each attempt printed as it ends.
+    fn sim<A: SimulatedArm>(
+        &self,
+        policy: &mut PolicyRunner,
+        calibration: Option<TactileCalibration>,
+        source: Option<GraspSource>,
+    ) -> Result<()> {
+        let (a, g) = (self.a, self.g);
+        let sim_cfg = sim_config(a.sim_config.as_ref())?;
+        let cfg = pipeline_config(a, Some(&sim_cfg))?;
+        let object = sim_object(&a.object)?;
+        if a.attempts > 1 && source.is_some() {
+            bail!(
+                "--attempts {} plans each attempt on the simulated cameras' cloud: drop \
+                 --grasp, --cloud and --center",
+                a.attempts
+            );
+        }
+        let mut backend = SimBackendConfig::default();
+        backend.raw.seed = self.seed;
+        let mut session = Session::<A>::start(
+            self.robot,
+            object,
+            sim_cfg,
+            SessionConfig {
+                pipeline: cfg,
+                backend,
+                calibration,
+                source,
+                cameras: CameraConfig::default(),
+                seed: self.seed,
+                attempts: a.attempts,
+            },
+        )?;
+        if let Some(p) = &a.save_cloud {
+            save_cloud(p, session.source())?;
+        }
+        let calibrated_now = session.calibrated_now();
+        let mut log = AttemptLog::open(self.log)?;
+        let mut reports = Vec::new();
+        let numbered = a.attempts > 1;
+        let out = session.run(
+            self.robot,
+            &mut Controller::Policy(policy),
+            &mut log,
+            |r: &AttemptReport| {
+                let number = numbered.then_some(r.number);
+                reports.push(self.report(&r.plan, &r.outcome, calibrated_now, number));
+            },
+        )?;
+        if let Some((k, e)) = &out.stopped {
+            if !g.quiet {
+                eprintln!("no attempt {k}: {e}");
+            }
+        }
+        print_reports(reports, g)
+    }
+
+    /// Prints one attempt's text report (unless `--json`) and returns its JSON report.
+    fn report(
+        &self,
+        plan: &GraspPlan,
+        out: &AttemptOutcome,
+        calibrated_now: bool,
+        number: Option<usize>,
+    ) -> serde_json::Value {
+        let a = self.a;
+        let simulated = a.backend != Backend::Ros;
+        let report = serde_json::json!({
+            "backend": a.backend.name(),
+            "policy": a.policy,
+            "object": simulated.then_some(&a.object),
+            "calibrated_now": calibrated_now,
+            "plan": plan,
+            "outcome": out,
+            "log": self.log,
+        });
+        if !self.g.json {
+            if let Some(n) = number {
+                println!("attempt {n}:");
+            }
+            let where_ = if simulated {
+                format!(" on {}", a.object)
+            } else {
+                String::new()
+            };
+            println!(
+                "grasp at ({:.3}, {:.3}, {:.3}) m, closing ({:.2}, {:.2}, {:.2}){}",
+                plan.center[0],
+                plan.center[1],
+                plan.center[2],
+                plan.closing[0],
+                plan.closing[1],
+                plan.closing[2],
+                match plan.score {
+                    Some(s) => format!(
+                        ", score {s:.3} (best reachable of {} candidates)",
+                        plan.candidates
+                    ),
+                    None if plan.fallback => format!(
+                        ", across the cloud's narrow axis (no usable antipodal candidate of {})",
+                        plan.candidates
+                    ),
+                    None => String::new(),
+                }
+            );
+            println!(
+                "stage 1: {} updates, {}; policy: {} steps, {}; {} clamped commands",
+                out.stage1_updates,
+                if out.touched { "touched" } else { "no touch" },
+                out.policy_steps,
+                if out.lifted { "lifted" } else { "no lift" },
+                out.clamped_commands
+            );
+            println!(
+                "{}{}: {} ({}; judged by the {}), {:.2} s, {} log lines in {}",
+                if out.success { "SUCCESS" } else { "FAILURE" },
+                where_,
+                out.reason,
+                if calibrated_now {
+                    "calibrated now"
+                } else {
+                    "calibration file"
+                },
+                out.judged_by,
+                out.time_s,
+                out.log_lines,
+                self.log.display()
+            );
+        }
+        report
     }
 }
 
-fn plan(
-    robot: &Robot,
-    source: &GraspSource,
-    cfg: &PipelineConfig,
-    policy: &PolicyRunner,
-    seed: u64,
-    tried: &[GraspPlan],
-) -> Result<GraspPlan> {
-    let mut cfg = cfg.clone();
-    cfg.antipodal.seed = seed;
-    let preshape = cfg.preshape_angles(policy.env_config())?;
-    plan_grasp_avoiding(robot, source, &preshape, &cfg, tried).context("planning the grasp")
-}
-
 /// `backend` behind the safety layer: joint limits, rate limits, the sensor watchdog.
+#[cfg_attr(not(feature = "ros"), allow(dead_code))]
 fn safe_arm<B: HandArm>(backend: B, robot: &Robot, cfg: &PipelineConfig) -> Result<SafeHandArm<B>> {
     Ok(SafeHandArm::new(
         backend,
@@ -360,95 +499,6 @@ fn safe_arm<B: HandArm>(backend: B, robot: &Robot, cfg: &PipelineConfig) -> Resu
         cfg.safety,
         Arc::new(AtomicBool::new(false)),
     )?)
-}
-
-/// One attempt's plan and settings.
-struct Attempt<'a> {
-    plan: &'a GraspPlan,
-    calibration: &'a TactileCalibration,
-    cfg: &'a PipelineConfig,
-    calibrated_now: bool,
-    /// The attempt's number when `--attempts` allows more than one.
-    number: Option<usize>,
-}
-
-/// Runs one attempt, prints its text report (unless `--json`) and returns its outcome with
-/// its JSON report.
-fn attempt<B: HandArm>(
-    arm: &mut SafeHandArm<B>,
-    robot: &Robot,
-    at: &Attempt,
-    policy: &mut PolicyRunner,
-    log: &mut AttemptLog,
-    a: &RunArgs,
-    g: &Global,
-) -> Result<(AttemptOutcome, serde_json::Value)> {
-    let plan = at.plan;
-    let out = run_attempt(arm, robot, plan, policy, at.calibration, at.cfg, log)
-        .context("grasp attempt failed")?;
-    let report = serde_json::json!({
-        "backend": format!("{:?}", a.backend).to_lowercase(),
-        "policy": a.policy,
-        "object": (a.backend == Backend::Sim).then_some(&a.object),
-        "calibrated_now": at.calibrated_now,
-        "plan": plan,
-        "outcome": out,
-        "log": a.log,
-    });
-    if !g.json {
-        if let Some(n) = at.number {
-            println!("attempt {n}:");
-        }
-        let where_ = if a.backend == Backend::Sim {
-            format!(" on {}", a.object)
-        } else {
-            String::new()
-        };
-        println!(
-            "grasp at ({:.3}, {:.3}, {:.3}) m, closing ({:.2}, {:.2}, {:.2}){}",
-            plan.center[0],
-            plan.center[1],
-            plan.center[2],
-            plan.closing[0],
-            plan.closing[1],
-            plan.closing[2],
-            match plan.score {
-                Some(s) => format!(
-                    ", score {s:.3} (best reachable of {} candidates)",
-                    plan.candidates
-                ),
-                None if plan.fallback => format!(
-                    ", across the cloud's narrow axis (no usable antipodal candidate of {})",
-                    plan.candidates
-                ),
-                None => String::new(),
-            }
-        );
-        println!(
-            "stage 1: {} updates, {}; policy: {} steps, {}; {} clamped commands",
-            out.stage1_updates,
-            if out.touched { "touched" } else { "no touch" },
-            out.policy_steps,
-            if out.lifted { "lifted" } else { "no lift" },
-            out.clamped_commands
-        );
-        println!(
-            "{}{}: {} ({}; judged by the {}), {:.2} s, {} log lines in {}",
-            if out.success { "SUCCESS" } else { "FAILURE" },
-            where_,
-            out.reason,
-            if at.calibrated_now {
-                "calibrated now"
-            } else {
-                "calibration file"
-            },
-            out.judged_by,
-            out.time_s,
-            out.log_lines,
-            a.log.display()
-        );
-    }
-    Ok((out, report))
 }
 
 /// With `--json`: one attempt's report as it is, several as `{"attempts": [...],
@@ -467,4 +517,134 @@ fn print_reports(mut reports: Vec<serde_json::Value>, g: &Global) -> Result<()> 
     };
     println!("{}", serde_json::to_string_pretty(&j)?);
     Ok(())
+}
+
+/// The agents of `--policy` with `--objects`: `baseline1`, `baseline2` or a checkpoint
+/// folder (the shipped default found from any working directory), named as given.
+fn table_agents(arg: &str) -> Result<Vec<TableAgent>> {
+    let names: Vec<&str> = arg.split(',').map(str::trim).collect();
+    if names.iter().any(|n| n.is_empty()) {
+        bail!("--policy `{arg}`: an empty agent name in the list");
+    }
+    if let Some(n) = grasp::util::seq::first_repeat(&names) {
+        bail!("--policy `{arg}`: `{n}` is listed twice");
+    }
+    names
+        .iter()
+        .map(|&n| {
+            Ok(match n {
+                "baseline1" => TableAgent::Baseline1,
+                "baseline2" => TableAgent::Baseline2,
+                path => TableAgent::Policy {
+                    dir: assets::default_or_given(
+                        Path::new(path),
+                        grasp::run::DEFAULT_POLICY,
+                        "--policy",
+                    )?,
+                    label: path.to_string(),
+                },
+            })
+        })
+        .collect()
+}
+
+/// Table I through the robot path on the simulated backend `A` (`--objects`).
+fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
+    let objects_arg = a.objects.as_deref().unwrap_or_default();
+    if a.attempts > 1 {
+        bail!(
+            "--attempts {} with --objects: a table makes one attempt per trial (the paper's \
+             protocol)",
+            a.attempts
+        );
+    }
+    if a.trials == 0 || a.trials > grasp::eval::MAX_TRIALS {
+        bail!(
+            "--trials {} must be in 1..={}",
+            a.trials,
+            grasp::eval::MAX_TRIALS
+        );
+    }
+    let agents = table_agents(&a.policy)?;
+    let dirs: Vec<PathBuf> = agents
+        .iter()
+        .filter_map(|ag| match ag {
+            TableAgent::Policy { dir, .. } => Some(dir.clone()),
+            _ => None,
+        })
+        .collect();
+    check_overlaps(a, &dirs, a.log.as_deref())?;
+    let calibration = match &a.calibration {
+        Some(p) => Some(TactileCalibration::load(p)?),
+        None => None,
+    };
+    let sim_cfg = sim_config(a.sim_config.as_ref())?;
+    let pipeline = pipeline_config(a, Some(&sim_cfg))?;
+    let objects = sim_objects(objects_arg)?;
+    let cfg = TableConfig {
+        trials: a.trials,
+        seed: g.seed.unwrap_or(0),
+        threads: threads(a.threads)?,
+        sim: sim_cfg,
+        pipeline,
+        backend: SimBackendConfig::default(),
+        cameras: CameraConfig::default(),
+        calibration,
+    };
+    let total = (agents.len() * objects.len() * a.trials) as u64;
+    let bar = progress_bar(total, !(g.quiet || g.json));
+    if !g.quiet && !g.json {
+        eprintln!(
+            "running {} agents on {} objects x {} trials through the {} robot ...",
+            agents.len(),
+            objects.len(),
+            a.trials,
+            A::NAME
+        );
+    }
+    let robot = Robot::builtin(Side::Left);
+    let tick = || bar.inc(1);
+    let results = run_table::<A>(&robot, &objects, &agents, &cfg, a.log.as_deref(), &tick)
+        .context("running the table")?;
+    bar.finish_and_clear();
+    if g.json {
+        println!("{}", serde_json::to_string_pretty(&results)?);
+        return Ok(());
+    }
+    let plain: Vec<grasp::eval::AgentResult> = results.iter().map(|r| r.result.clone()).collect();
+    print!("{}", grasp::eval::text_table(&plain));
+    for r in &plain {
+        print!("{}", grasp::eval::physics_line(r));
+    }
+    for r in &results {
+        for e in &r.trial_errors {
+            println!(
+                "{}: {} trial {} failed: {}",
+                r.result.agent, e.object, e.trial, e.reason
+            );
+        }
+    }
+    let pairs = grasp::eval::paired_lines(&grasp::eval::paired_with_first(&plain))
+        + &grasp::eval::unpaired_lines(&plain);
+    print!("{pairs}");
+    if let Some(p) = &a.log {
+        eprintln!("attempt logs appended to {}", p.display());
+    }
+    Ok(())
+}
+
+/// A progress bar of `total` trials on stderr when `show` and stderr is a terminal.
+fn progress_bar(total: u64, show: bool) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if show && std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(total);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} trials, {elapsed} (eta {eta})",
+        ) {
+            b.set_style(style);
+        }
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    }
 }

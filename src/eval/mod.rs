@@ -35,7 +35,7 @@ pub use results::{
     over_1cm_by_body, physics_line, read_results, saved_agent_name, select_agents, AgentResult,
     ContactStats, LiftStats, ObjectResult, PregraspStats, RankStats, TrialFailure,
 };
-pub use tables::{csv_table, markdown_table};
+pub use tables::{csv_table, markdown_table, text_table};
 
 use crate::env::grasp::{EpisodeSummary, GraspEnv, GraspEnvError};
 pub use rank::RankedPregrasp;
@@ -43,7 +43,8 @@ use rayon::prelude::*;
 use record::RecordOptions;
 use results::failure_counts;
 use std::path::PathBuf;
-use trial::{run_trial, Actor, TrialOutcome};
+pub use trial::TrialOutcome;
+use trial::{run_trial, Actor};
 pub use trial::{RetryStats, TrialPlan};
 
 /// Most trials per object an evaluation runs (`grasp eval --trials`, a grid's `[eval]
@@ -174,6 +175,26 @@ pub fn evaluate_until(
             .collect::<Result<Vec<_>, _>>()
     })?;
     let wall_s = start.elapsed().as_secs_f64();
+    Ok(aggregate(label, names, per_object, plan, wall_s))
+}
+
+/// The result of agent `label` from its trials `per_object` (one list per object of
+/// `names`, in trial order; an object with none is left out, and fewer than
+/// `plan.trials` anywhere marks the result interrupted), as [`evaluate`] reports it:
+/// per-object counts, Wilson intervals, physics failures, contact and lift statistics.
+/// Shared with the table of `grasp run --objects`.
+pub fn aggregate(
+    label: String,
+    names: &[String],
+    per_object: Vec<Vec<TrialOutcome>>,
+    plan: &TrialPlan,
+    wall_s: f64,
+) -> AgentResult {
+    let TrialPlan {
+        trials,
+        seed,
+        attempts,
+    } = *plan;
     let interrupted = per_object.iter().any(|t| t.len() < trials);
     // An object none of whose trials finished is left out (no rate to give).
     let (names, per_object): (Vec<&String>, Vec<Vec<TrialOutcome>>) = names
@@ -248,7 +269,7 @@ pub fn evaluate_until(
              simulator error or panic; counted as failed trials)"
         );
     }
-    Ok(AgentResult {
+    AgentResult {
         physics_failures,
         failures_by_kind,
         penetrations_by_body,
@@ -269,7 +290,7 @@ pub fn evaluate_until(
         recordings,
         interrupted,
         record_errors,
-    })
+    }
 }
 
 impl From<crate::checkpoint::CheckpointError> for EvalError {

@@ -15,6 +15,44 @@ fn csv_field(name: &str) -> String {
     name.replace(',', ";").replace(char::is_control, " ")
 }
 
+/// The per-agent text table `grasp eval` prints: each agent's mean success with its
+/// Wilson interval, steps per episode, speed and physics failures, then one line per
+/// object (successes, rate, interval, physics failures).
+pub fn text_table(results: &[AgentResult]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    for r in results {
+        let _ = writeln!(
+                s,
+                "{}: mean success {:.1} % (95 % CI {:.1}-{:.1}), {:.2} steps per episode, {:.1} control steps/s, {} physics failures",
+                r.agent,
+                100.0 * r.mean_rate,
+                100.0 * r.ci95.0,
+                100.0 * r.ci95.1,
+                r.mean_steps,
+                r.control_steps_per_s,
+                r.physics_failures
+            );
+        for o in &r.objects {
+            let failures = match o.physics_failures {
+                0 => String::new(),
+                f => format!("  {f} physics failure{}", if f == 1 { "" } else { "s" }),
+            };
+            let _ = writeln!(
+                s,
+                "  {:<22} {:>3}/{:<3} {:>5.0} %  [{:>3.0}, {:>3.0}]{failures}",
+                o.object,
+                o.successes,
+                o.trials,
+                100.0 * o.rate,
+                100.0 * o.ci95.0,
+                100.0 * o.ci95.1
+            );
+        }
+    }
+    s
+}
+
 /// A Markdown table in the layout of Table I: agents as rows, objects as columns, then
 /// the mean. Rates in percent. When any episode ended in a physics failure, a last column
 /// counts them per agent.

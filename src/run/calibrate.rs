@@ -3,6 +3,7 @@
 //! (how it is pressed is the caller's: an operator on the robot, a known force in the
 //! simulator, see [`SimHandArm::read_pressed`](super::sim_backend::SimHandArm::read_pressed)).
 
+use super::simulated::SimulatedArm;
 use super::RunError;
 use crate::hardware::calibration::{TactileCalibration, TactileCalibrator};
 use crate::hardware::{HandArm, RawSensors, N_TACTILE};
@@ -61,5 +62,23 @@ pub fn calibrate_tactile<A: HandArm>(
         still_max,
         pressed_max,
         still_readings,
+    })
+}
+
+/// The simulated fingertips' calibration, as `grasp run` and `grasp calibrate` make it on
+/// any [`SimulatedArm`]: `still` readings 20 ms apart, then each fingertip pressed with a
+/// known force (`press_n` newtons, `presses` readings each); `fraction` is the contact
+/// threshold.
+pub fn calibrate_simulated<A: SimulatedArm>(
+    arm: &mut A,
+    still: usize,
+    fraction: f64,
+    press_n: f64,
+    presses: usize,
+) -> Result<CalibrationReport, RunError> {
+    calibrate_tactile(arm, still, 0.02, fraction, |a, finger| {
+        (0..presses)
+            .map(|_| a.read_pressed(finger, press_n).map_err(Into::into))
+            .collect()
     })
 }

@@ -7,10 +7,20 @@
 //! - [`sim_backend`]: [`SimHandArm`](sim_backend::SimHandArm), the Rapier simulation
 //!   with a raw-sensor model (tactile offsets, gains and noise, drifting tendon forces),
 //!   a simulated clock and a sensor-dropout switch for the watchdog.
+//! - [`raw_model`]: [`RawModel`](raw_model::RawModel), the raw-sensor model every
+//!   simulated backend shares.
+//! - [`simulated`]: [`SimulatedArm`](simulated::SimulatedArm), what a simulated backend
+//!   offers beyond [`HandArm`](crate::hardware::HandArm) (cameras, a known press, a
+//!   settle for a retry, the physics failure); implemented by `SimHandArm`.
 //! - [`calibrate`]: the tactile calibration procedure of Sec. V-C on any backend.
 //! - [`pipeline`]: grasp planning (a given two-finger grasp or antipodal candidates on a
 //!   point cloud, the hand mapping, UR10e IK) and the attempt (stage 1, the policy, the
-//!   lift), logged step by step.
+//!   lift), logged step by step; the scripted baselines in place of stage 1 and the
+//!   policy ([`Controller`](pipeline::Controller)).
+//! - [`session`]: `grasp run` on a simulated backend: set-up, calibration, cameras and
+//!   the attempt-and-retry loop, generic over [`SimulatedArm`](simulated::SimulatedArm).
+//! - [`table`]: Table I through the robot path: agents times objects times trials, each
+//!   trial a session, judged by the backend and aggregated as `grasp eval` does.
 
 pub mod calibrate;
 
@@ -25,9 +35,11 @@ pub mod mjcf;
 pub mod mujoco_backend;
 pub mod pipeline;
 pub mod plan;
-#[cfg(feature = "mujoco")]
 pub mod raw_model;
+pub mod session;
 pub mod sim_backend;
+pub mod simulated;
+pub mod table;
 
 use crate::hardware::calibration::CalibrationError;
 use crate::hardware::log::LogError;

@@ -37,6 +37,7 @@
 use super::mjcf::{self, MujocoSettings};
 use super::raw_model::RawModel;
 use super::sim_backend::{SimBackendConfig, GUARD_MAX_M, GUARD_STEP_M, MAX_PALM_TILT_RAD};
+use super::simulated::SimulatedArm;
 use crate::hardware::pointcloud::CloudError;
 use crate::hardware::{
     check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
@@ -656,6 +657,40 @@ fn ids(robot: &Robot, m: &MjModel) -> Result<Ids, HwError> {
         hand,
         object,
     })
+}
+
+impl SimulatedArm for MujocoHandArm {
+    const NAME: &'static str = "mujoco";
+
+    /// The backend with the built-in engine settings (`configs/mujoco.toml`).
+    fn build(
+        robot: &Robot,
+        object: ObjectSpec,
+        sim_cfg: SimConfig,
+        cfg: SimBackendConfig,
+    ) -> Result<Self, HwError> {
+        MujocoHandArm::new(robot, object, sim_cfg, cfg, &MujocoSettings::builtin())
+    }
+
+    fn camera_cloud(&self, cam: &CameraConfig, seed: u64) -> Result<Vec<Point3<f64>>, CloudError> {
+        MujocoHandArm::camera_cloud(self, cam, seed)
+    }
+
+    fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
+        MujocoHandArm::read_pressed(self, finger, force_n)
+    }
+
+    fn settle_for_retry(&mut self) -> Result<(), HwError> {
+        MujocoHandArm::settle_for_retry(self)
+    }
+
+    fn physics_failure(&self) -> Option<String> {
+        self.failure.clone()
+    }
+
+    fn lift_report(&self) -> Option<LiftOutcome> {
+        self.lift.clone()
+    }
 }
 
 impl HandArm for MujocoHandArm {

@@ -26,7 +26,7 @@
 
 use super::RunError;
 use crate::env::action::{clip_unit, component_std, hand_targets, lift_targets, ActionConfig};
-use crate::env::closing::ClosingPath;
+use crate::env::closing::{closing_target, ClosingPath};
 use crate::env::grasp::{Agent, AtMaxSteps, EnvConfig};
 use crate::env::obs::{FrameStack, Modality, ObsLayout, N_SURFACE};
 use crate::eval::PolicyAgent;
@@ -387,6 +387,10 @@ pub struct AttemptOutcome {
     pub log_lines: u64,
     /// Backend time at the end (s).
     pub time_s: f64,
+    /// The calibrated fingertip contacts (FF, MF, RF, LF, TH) of the last reading before
+    /// the lift (all off where the attempt did not lift); not in the JSON report.
+    #[serde(skip)]
+    pub contacts_at_lift: [bool; 5],
 }
 
 /// The mapped view of one reading.
@@ -498,6 +502,49 @@ fn applied(
     out
 }
 
+/// Who closes the hand and decides the lift in an attempt ([`run_attempt_with`]).
+pub enum Controller<'a> {
+    /// Stage 1 (the policy's closing trajectory T until a calibrated touch), then the
+    /// trained policy until it lifts.
+    Policy(&'a mut PolicyRunner),
+    /// A scripted baseline of Sec. V-D in place of stage 1 and the policy, as
+    /// [`GraspEnv::run_baseline`](crate::env::grasp::GraspEnv::run_baseline) runs it:
+    /// every joint follows the joint-space closing trajectory
+    /// ([`closing_target`]) from the plan's preshape towards the power grasp for
+    /// `closing_time / closing_period` periods of [`EnvConfig::default`], then holds for
+    /// a 0.3 s settle, and the arm lifts. Baseline 2 (`stop_on_touch`) freezes FF, MF and
+    /// RF (joints 2..6, 6..10, 10..14) once their fingertip reports contact: the
+    /// robot's CALIBRATED tactile contact, not the simulator's.
+    Baseline {
+        /// Baseline 2 (`true`) or baseline 1 (`false`).
+        stop_on_touch: bool,
+    },
+}
+
+impl Controller<'_> {
+    /// The environment whose start posture, closing trajectory and step limit the
+    /// controller acts in: the policy's training environment, the defaults for the
+    /// baselines (whose start posture `grasp eval` also takes from them).
+    pub fn env_config(&self) -> EnvConfig {
+        match self {
+            Controller::Policy(p) => p.env.clone(),
+            Controller::Baseline { .. } => EnvConfig::default(),
+        }
+    }
+
+    /// The preshape the plan gives the hand for this controller
+    /// ([`PipelineConfig::preshape_angles`] of [`Controller::env_config`]).
+    pub fn preshape(&self, cfg: &PipelineConfig) -> Result<[f64; N_HAND_JOINTS], RunError> {
+        cfg.preshape_angles(&self.env_config())
+    }
+}
+
+/// The finger joints baseline 2 freezes at a touch: FF, MF, RF (paper order).
+pub const BASELINE_FROZEN_FINGERS: [std::ops::Range<usize>; 3] = [2..6, 6..10, 10..14];
+
+/// Settle of the baselines after the closing trajectory, before the lift (s).
+pub const BASELINE_SETTLE_S: f64 = 0.3;
+
 /// Runs one grasp attempt of `plan` with `policy` on `arm` (see the module docs), logging
 /// every step to `log`. On an error the outcome line records it before it is returned.
 pub fn run_attempt<B: HandArm>(
@@ -505,6 +552,22 @@ pub fn run_attempt<B: HandArm>(
     robot: &Robot,
     plan: &GraspPlan,
     policy: &mut PolicyRunner,
+    calibration: &TactileCalibration,
+    cfg: &PipelineConfig,
+    log: &mut AttemptLog,
+) -> Result<AttemptOutcome, RunError> {
+    let mut c = Controller::Policy(policy);
+    run_attempt_with(arm, robot, plan, &mut c, calibration, cfg, log)
+}
+
+/// [`run_attempt`] with any [`Controller`]: the policy, or a scripted baseline in place of
+/// stage 1 and the policy (the tendon baseline, preshape, approach, lift and judgement are
+/// the same, every step logged alike).
+pub fn run_attempt_with<B: HandArm>(
+    arm: &mut SafeHandArm<B>,
+    robot: &Robot,
+    plan: &GraspPlan,
+    controller: &mut Controller,
     calibration: &TactileCalibration,
     cfg: &PipelineConfig,
     log: &mut AttemptLog,
@@ -520,7 +583,7 @@ pub fn run_attempt<B: HandArm>(
         clamped: 0,
         last_sent: [0.0; N_HAND_JOINTS],
     };
-    match attempt_body(&mut at, robot, plan, policy, cfg) {
+    match attempt_body(&mut at, robot, plan, controller, cfg) {
         Ok(mut out) => {
             out.time_s = at.arm.now();
             at.log.outcome(OutcomeRecord {
@@ -549,9 +612,15 @@ fn attempt_body<B: HandArm>(
     at: &mut Attempt<'_, B>,
     robot: &Robot,
     plan: &GraspPlan,
-    policy: &mut PolicyRunner,
+    controller: &mut Controller,
     cfg: &PipelineConfig,
 ) -> Result<AttemptOutcome, RunError> {
+    let policy = match controller {
+        Controller::Policy(p) => p,
+        Controller::Baseline { stop_on_touch } => {
+            return baseline_attempt(at, plan, *stop_on_touch, cfg);
+        }
+    };
     let env = policy.env.clone();
     if env.modality == Modality::M3G && policy.cloud.is_none() {
         return Err(RunError::Policy {
@@ -589,6 +658,7 @@ fn attempt_body<B: HandArm>(
         clamped_commands: 0,
         log_lines: 0,
         time_s: 0.0,
+        contacts_at_lift: [false; 5],
     };
     if !lifted && env.at_max_steps == AtMaxSteps::Lift {
         // The policy was trained to lift at the step cap.
@@ -611,8 +681,80 @@ fn attempt_body<B: HandArm>(
         success,
         reason,
         judged_by: judged_by.into(),
+        contacts_at_lift: m.tactile,
         ..base_out
     })
+}
+
+/// A scripted baseline's attempt ([`Controller::Baseline`]): the tendon baseline, the
+/// preshape and approach of the policy's attempt, the joint-space closing with its settle
+/// (FF, MF, RF frozen at their calibrated touch for baseline 2), the lift and the
+/// judgement.
+fn baseline_attempt<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    plan: &GraspPlan,
+    stop_on_touch: bool,
+    cfg: &PipelineConfig,
+) -> Result<AttemptOutcome, RunError> {
+    let env = EnvConfig::default();
+    tendon_baseline(at, cfg)?;
+    place_hand(at, plan, cfg)?;
+    let (m, touched, updates) = baseline_close(at, &env, &plan.preshape, stop_on_touch)?;
+    // The lift decision, logged with the targets the lift holds (no squeeze: the
+    // environment's baselines lift as they closed).
+    let hold = at.last_sent;
+    at.log_step(&m, Vec::new(), hold, Vec::new())?;
+    let (success, reason, judged_by) = lift_and_judge(at, cfg)?;
+    Ok(AttemptOutcome {
+        success,
+        reason,
+        judged_by: judged_by.into(),
+        stage1_updates: updates,
+        touched,
+        policy_steps: 0,
+        lifted: true,
+        clamped_commands: 0,
+        log_lines: 0,
+        time_s: 0.0,
+        contacts_at_lift: m.tactile,
+    })
+}
+
+/// The baselines' closing: `n = closing_time / closing_period` target updates along the
+/// joint-space trajectory from `start` to the power grasp and a 0.3 s settle at the power
+/// grasp, one closing period each; with `stop_on_touch` the joints of FF, MF and RF keep
+/// their last target once the finger's calibrated tactile contact is on. Returns the last
+/// reading, whether any fingertip touched and the updates sent.
+fn baseline_close<B: HandArm>(
+    at: &mut Attempt<'_, B>,
+    env: &EnvConfig,
+    start: &[f64; N_HAND_JOINTS],
+    stop_on_touch: bool,
+) -> Result<(Mapped, bool, usize), RunError> {
+    let n = (env.closing_time / env.closing_period).round().max(1.0) as usize;
+    let settle = (BASELINE_SETTLE_S / env.closing_period).round() as usize;
+    let closed = script::power_grasp();
+    let mut frozen = [false; 3];
+    let mut targets = *start;
+    let mut touched = false;
+    let mut m = at.read()?;
+    for i in 1..=n + settle {
+        for (j, t) in targets.iter_mut().enumerate() {
+            let f = BASELINE_FROZEN_FINGERS.iter().position(|r| r.contains(&j));
+            if f.is_some_and(|f| frozen[f]) {
+                continue;
+            }
+            *t = closing_target(start, &closed, j, i, n);
+        }
+        m = at.command(&targets, Vec::new(), env.closing_period)?;
+        touched |= m.tactile.contains(&true);
+        if stop_on_touch {
+            for (f, z) in frozen.iter_mut().enumerate() {
+                *z |= m.tactile[f];
+            }
+        }
+    }
+    Ok((m, touched, n + settle))
 }
 
 /// Reads the empty, still hand's tendons `baseline_readings` times: tau_j0.
@@ -867,5 +1009,137 @@ mod tests {
         std::fs::write(&p, "center = [0, 0, 0.05]\nclosing = [0, 1, 0]\n").unwrap();
         let g = load_grasp_file(&p).unwrap();
         assert_eq!(g.approach, -Vector3::z());
+    }
+
+    /// A scripted hand: it takes every target at once, its clock advances by the waits,
+    /// and fingertip FF reads far above its range from the `touch_after`-th hand command
+    /// on; it holds the object after any lift.
+    struct ScriptedArm {
+        t: f64,
+        q: [f64; N_HAND_JOINTS],
+        commands: Vec<[f64; N_HAND_JOINTS]>,
+        touch_after: usize,
+        lifted: bool,
+    }
+
+    impl HandArm for ScriptedArm {
+        fn read(&mut self) -> Result<RawSensors, crate::hardware::HwError> {
+            let mut tactile_raw = [0.0; 5];
+            if self.commands.len() >= self.touch_after {
+                tactile_raw[0] = 1000.0;
+            }
+            Ok(RawSensors {
+                stamp: self.t,
+                joint_angles: self.q,
+                tactile_raw,
+                tendon_raw: [0.0; N_TENDONS],
+            })
+        }
+        fn command_hand(
+            &mut self,
+            targets: &[f64; N_HAND_JOINTS],
+        ) -> Result<(), crate::hardware::HwError> {
+            self.q = *targets;
+            self.commands.push(*targets);
+            Ok(())
+        }
+        fn move_arm(&mut self, motion: &ArmMotion) -> Result<(), crate::hardware::HwError> {
+            self.lifted |= matches!(motion, ArmMotion::Lift { .. });
+            Ok(())
+        }
+        fn stop(&mut self) -> Result<(), crate::hardware::HwError> {
+            Ok(())
+        }
+        fn now(&self) -> f64 {
+            self.t
+        }
+        fn wait(&mut self, seconds: f64) -> Result<(), crate::hardware::HwError> {
+            self.t += seconds;
+            Ok(())
+        }
+        fn lift_outcome(&self) -> Option<bool> {
+            self.lifted.then_some(true)
+        }
+    }
+
+    /// The hand commands of a baseline attempt on a [`ScriptedArm`] whose FF touches at
+    /// its `touch_after`-th command, and the attempt's outcome.
+    fn baseline_commands(
+        stop_on_touch: bool,
+        touch_after: usize,
+    ) -> (Vec<[f64; N_HAND_JOINTS]>, AttemptOutcome) {
+        let robot = Robot::builtin(Side::Left);
+        let cfg = PipelineConfig {
+            safety: SafetyConfig {
+                max_step_rad: 10.0,
+                ..SafetyConfig::default()
+            },
+            ..PipelineConfig::default()
+        };
+        let preshape = cfg.preshape_angles(&EnvConfig::default()).unwrap();
+        let arm = ScriptedArm {
+            t: 0.0,
+            q: preshape,
+            commands: Vec::new(),
+            touch_after,
+            lifted: false,
+        };
+        let mut arm = SafeHandArm::new(
+            arm,
+            robot.hand_limits(),
+            cfg.safety,
+            std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false)),
+        )
+        .unwrap();
+        let plan = GraspPlan {
+            center: [0.0, 0.0, 0.05],
+            approach: [0.0, 0.0, -1.0],
+            closing: [1.0, 0.0, 0.0],
+            score: None,
+            candidates: 0,
+            skipped: 0,
+            fallback: false,
+            preshape,
+            pregrasp_q: ur10e::HOME,
+            grasp_q: ur10e::HOME,
+        };
+        let cal = TactileCalibration::new([0.0; 5], [100.0; 5], 0.003).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut log = AttemptLog::open(&dir.path().join("a.jsonl")).unwrap();
+        let mut c = Controller::Baseline { stop_on_touch };
+        let out = run_attempt_with(&mut arm, &robot, &plan, &mut c, &cal, &cfg, &mut log).unwrap();
+        // Every closing update and the lift decision are logged, then the outcome.
+        assert_eq!(log.lines_written(), out.stage1_updates as u64 + 2);
+        (arm.backend().commands.clone(), out)
+    }
+
+    #[test]
+    fn baseline2_freezes_a_finger_at_its_calibrated_touch_and_baseline1_does_not() {
+        let env = EnvConfig::default();
+        let n = (env.closing_time / env.closing_period).round() as usize;
+        let settle = (BASELINE_SETTLE_S / env.closing_period).round() as usize;
+        let (b2, out) = baseline_commands(true, 3);
+        assert_eq!(b2.len(), n + settle);
+        assert!(out.success && out.lifted && out.touched, "{out:?}");
+        assert_eq!(out.policy_steps, 0);
+        assert_eq!(out.judged_by, "simulator");
+        // FF (joints 2..6) touched after the 3rd command: it keeps that command's
+        // targets; MF goes on closing to the power grasp.
+        let closed = script::power_grasp();
+        for c in &b2[3..] {
+            assert_eq!(&c[2..6], &b2[2][2..6]);
+        }
+        assert_ne!(&b2[3][6..10], &b2.last().unwrap()[6..10]);
+        assert!((b2.last().unwrap()[7] - closed[7]).abs() < 1e-12);
+        // Baseline 1 closes FF too, along the same trajectory.
+        let (b1, _) = baseline_commands(false, 3);
+        assert_eq!(b1.len(), b2.len());
+        assert_eq!(b1[..3], b2[..3]);
+        assert!((b1.last().unwrap()[3] - closed[3]).abs() < 1e-12);
+        assert_ne!(&b1[3][2..6], &b2[3][2..6]);
+        // No touch: baseline 2 closes every finger like baseline 1.
+        let (never, out) = baseline_commands(true, usize::MAX);
+        assert_eq!(never, b1);
+        assert!(!out.touched);
     }
 }

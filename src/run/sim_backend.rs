@@ -4,7 +4,7 @@
 //!
 //! # Raw-sensor model
 //! For backend time `t` (s), fingertip `k` and actuator `j` (all noise Gaussian, drawn from
-//! one `ChaCha8Rng` seeded by [`RawModelConfig::seed`], a fixed number of draws per
+//! one `ChaCha8Rng` seeded by [`RawModelConfig::seed`] in [`RawModel`], a fixed number of draws per
 //! reading so that runs with the same seed see the same noise):
 //! - tactile: `raw_k = tactile_offset[k] + tactile_gain[k] * F_k + N(0, tactile_noise)`,
 //!   where `F_k` is the normal force (N) between the object and the distal phalanx
@@ -44,16 +44,15 @@
 use super::pipeline::ArmBase;
 use crate::hardware::pointcloud::CloudError;
 use crate::hardware::{
-    check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE, N_TENDONS,
+    check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
 };
 use crate::robot::grasp_map::hand_grasp_frame;
 use crate::robot::{ur10e, Posture, Robot};
 use crate::sim::settle::Unsettled;
 use crate::sim::{HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig};
 use nalgebra::{Isometry3, Point3, Vector3};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
+
+pub use super::raw_model::{RawModel, RawModelConfig};
 
 /// Largest tilt of the palm normal from the vertical that the simulator accepts (rad).
 pub const MAX_PALM_TILT_RAD: f64 = 1e-3;
@@ -61,91 +60,6 @@ pub const MAX_PALM_TILT_RAD: f64 = 1e-3;
 pub const GUARD_STEP_M: f64 = 0.005;
 /// Largest raise of the guarded placement (m).
 pub const GUARD_MAX_M: f64 = 0.10;
-
-/// Parameters of the raw-sensor model (see the module docs for the equations).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct RawModelConfig {
-    /// Tactile reading with no force, per fingertip FF, MF, RF, LF, TH (sensor units).
-    pub tactile_offset: [f64; N_TACTILE],
-    /// Tactile units per newton of contact force, per fingertip.
-    pub tactile_gain: [f64; N_TACTILE],
-    /// Standard deviation of the tactile noise (units).
-    pub tactile_noise: f64,
-    /// Tendon units per N m of actuator effort.
-    pub tendon_scale: f64,
-    /// Constant tendon offset (units).
-    pub tendon_offset: f64,
-    /// Linear tendon drift (units per second of backend time).
-    pub tendon_drift_rate: f64,
-    /// Random-walk tendon drift (units per square-root second).
-    pub tendon_drift_walk: f64,
-    /// Standard deviation of the tendon noise (units).
-    pub tendon_noise: f64,
-    /// Standard deviation of the joint-angle noise (rad).
-    pub joint_noise: f64,
-    /// Backend time at construction (s): where the linear drift starts.
-    pub clock_start_s: f64,
-    /// Seed of the noise.
-    pub seed: u64,
-}
-
-impl Default for RawModelConfig {
-    fn default() -> Self {
-        RawModelConfig {
-            tactile_offset: [312.0, 298.0, 305.0, 287.0, 321.0],
-            tactile_gain: [100.0, 95.0, 105.0, 98.0, 102.0],
-            tactile_noise: 0.3,
-            tendon_scale: 1000.0,
-            tendon_offset: 1500.0,
-            tendon_drift_rate: 2.0,
-            tendon_drift_walk: 1.0,
-            tendon_noise: 2.0,
-            joint_noise: 0.001,
-            clock_start_s: 0.0,
-            seed: 0,
-        }
-    }
-}
-
-impl RawModelConfig {
-    /// Checks that every number is finite, gains and scales positive, noises
-    /// non-negative; the error names the field.
-    pub fn validate(&self) -> Result<(), HwError> {
-        let bad = |field: String, detail: String| Err(HwError::InvalidCommand { field, detail });
-        for k in 0..N_TACTILE {
-            if !self.tactile_offset[k].is_finite() {
-                return bad(format!("tactile_offset[{k}]"), "must be finite".into());
-            }
-            if !(self.tactile_gain[k].is_finite() && self.tactile_gain[k] > 0.0) {
-                return bad(format!("tactile_gain[{k}]"), "must be positive".into());
-            }
-        }
-        for (name, v) in [
-            ("tendon_offset", self.tendon_offset),
-            ("tendon_drift_rate", self.tendon_drift_rate),
-            ("clock_start_s", self.clock_start_s),
-        ] {
-            if !v.is_finite() {
-                return bad(name.into(), format!("{v} is not finite"));
-            }
-        }
-        if !(self.tendon_scale.is_finite() && self.tendon_scale > 0.0) {
-            return bad("tendon_scale".into(), "must be positive".into());
-        }
-        for (name, v) in [
-            ("tactile_noise", self.tactile_noise),
-            ("tendon_drift_walk", self.tendon_drift_walk),
-            ("tendon_noise", self.tendon_noise),
-            ("joint_noise", self.joint_noise),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(name.into(), format!("{v} must be finite and >= 0"));
-            }
-        }
-        Ok(())
-    }
-}
 
 /// Where the object lies and where the arm stands in the simulated world.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -181,10 +95,9 @@ pub use crate::perception::camera::{camera_cloud, CameraConfig};
 pub struct SimHandArm {
     sim: HandSim,
     cfg: SimBackendConfig,
-    rng: ChaCha8Rng,
+    /// The raw-sensor model (noise generator and tendon walk).
+    raw: RawModel,
     clock_base: f64,
-    walk: [f64; N_TENDONS],
-    walk_time: f64,
     dropout_at: Option<f64>,
     last_fresh: Option<RawSensors>,
     extra_force: [f64; N_TACTILE],
@@ -212,7 +125,7 @@ impl SimHandArm {
         sim_cfg: SimConfig,
         cfg: SimBackendConfig,
     ) -> Result<SimHandArm, HwError> {
-        cfg.raw.validate()?;
+        let raw = RawModel::new(cfg.raw.clone())?;
         let finite = cfg.object_xy.iter().all(|v| v.is_finite())
             && cfg.object_yaw.is_finite()
             && cfg.home_clearance.is_finite()
@@ -225,14 +138,11 @@ impl SimHandArm {
         }
         let top = 2.0 * object.rest_height();
         let sim = HandSim::new(robot, object, sim_cfg).map_err(sim_err)?;
-        let rng = ChaCha8Rng::seed_from_u64(cfg.raw.seed);
         let clock = cfg.raw.clock_start_s;
         let mut arm = SimHandArm {
             sim,
-            rng,
+            raw,
             clock_base: clock,
-            walk: [0.0; N_TENDONS],
-            walk_time: clock,
             dropout_at: None,
             last_fresh: None,
             extra_force: [0.0; N_TACTILE],
@@ -405,41 +315,11 @@ impl SimHandArm {
     }
 
     fn fresh_reading(&mut self) -> RawSensors {
-        let raw = &self.cfg.raw;
         let t = self.clock_base + self.sim.time();
         let s = self.sim.sensors();
         let tip = self.sim.tip_forces();
-        let rng = &mut self.rng;
-        let mut gauss = |sigma: f64| {
-            let z: f64 = StandardNormal.sample(rng);
-            sigma * z
-        };
-        let joint_angles: [f64; N_HAND_JOINTS] =
-            std::array::from_fn(|k| s.q[k] + gauss(raw.joint_noise));
-        let tactile_raw: [f64; N_TACTILE] = std::array::from_fn(|k| {
-            raw.tactile_offset[k]
-                + raw.tactile_gain[k] * (tip[k] + self.extra_force[k])
-                + gauss(raw.tactile_noise)
-        });
-        let dt = (t - self.walk_time).max(0.0);
-        let walk_sigma = raw.tendon_drift_walk * dt.sqrt();
-        for w in self.walk.iter_mut() {
-            *w += gauss(walk_sigma);
-        }
-        self.walk_time = t;
-        let tendon_raw: [f64; N_TENDONS] = std::array::from_fn(|j| {
-            raw.tendon_scale * s.effort[j]
-                + raw.tendon_offset
-                + raw.tendon_drift_rate * t
-                + self.walk[j]
-                + gauss(raw.tendon_noise)
-        });
-        RawSensors {
-            stamp: t,
-            joint_angles,
-            tactile_raw,
-            tendon_raw,
-        }
+        let force: [f64; N_TACTILE] = std::array::from_fn(|k| tip[k] + self.extra_force[k]);
+        self.raw.reading(t, &s.q, &force, &s.effort)
     }
 }
 
@@ -520,6 +400,49 @@ impl HandArm for SimHandArm {
 
     fn lift_outcome(&self) -> Option<bool> {
         self.lift.as_ref().map(|l| l.success)
+    }
+}
+
+impl super::simulated::SimulatedArm for SimHandArm {
+    const NAME: &'static str = "sim";
+
+    fn build(
+        robot: &Robot,
+        object: ObjectSpec,
+        sim_cfg: SimConfig,
+        cfg: SimBackendConfig,
+    ) -> Result<Self, HwError> {
+        SimHandArm::new(robot, object, sim_cfg, cfg)
+    }
+
+    fn camera_cloud(&self, cam: &CameraConfig, seed: u64) -> Result<Vec<Point3<f64>>, CloudError> {
+        SimHandArm::camera_cloud(self, cam, seed)
+    }
+
+    fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
+        SimHandArm::read_pressed(self, finger, force_n)
+    }
+
+    fn settle_for_retry(&mut self) -> Result<(), HwError> {
+        SimHandArm::settle_for_retry(self)
+    }
+
+    fn physics_failure(&self) -> Option<String> {
+        self.sim.failure().map(|f| format!("{f:?}"))
+    }
+
+    fn failure_report(&self) -> Option<crate::sim::FailureReport> {
+        self.sim.failure_report()
+    }
+
+    fn lift_report(&self) -> Option<LiftOutcome> {
+        self.lift.clone()
+    }
+
+    fn deepest_contact(&self) -> Option<(f64, String)> {
+        self.sim
+            .deepest_contact()
+            .map(|c| (c.depth, c.with.clone()))
     }
 }
 

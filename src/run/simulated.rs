@@ -1,0 +1,62 @@
+//! [`SimulatedArm`]: a hand-arm system whose world is simulated (the Rapier simulator of
+//! [`super::sim_backend`], MuJoCo), so that `grasp run`'s session
+//! ([`super::session`]), its calibration ([`super::calibrate::calibrate_simulated`]) and
+//! its table of grasps over an object set ([`super::table`]) are written once for every
+//! engine: a backend is one file that implements this trait.
+
+use crate::hardware::pointcloud::CloudError;
+use crate::hardware::{HwError, RawSensors};
+use crate::robot::Robot;
+use crate::sim::{FailureReport, LiftOutcome, ObjectSpec, SimConfig};
+use nalgebra::Point3;
+
+use super::sim_backend::{CameraConfig, SimBackendConfig};
+
+/// A hand-arm whose world is simulated: built around one object, it can show the object to simulated depth cameras, press a fingertip with a known force (calibration), let the object settle for a retry, and judge a lift (HandArm::lift_outcome).
+pub trait SimulatedArm: crate::hardware::HandArm + Sized {
+    /// Short lower-case name for reports: "sim", "mujoco".
+    const NAME: &'static str;
+
+    /// The hand of `robot` with `object` at rest where `cfg` places it (`object_xy`,
+    /// `object_yaw`), the raw-sensor model of `cfg.raw`, the hand open above the object.
+    fn build(
+        robot: &Robot,
+        object: ObjectSpec,
+        sim_cfg: SimConfig,
+        cfg: SimBackendConfig,
+    ) -> Result<Self, HwError>;
+
+    /// The point cloud the depth cameras of `cam` see of the object as it lies now (world
+    /// frame, m), with noise drawn from `seed`.
+    fn camera_cloud(&self, cam: &CameraConfig, seed: u64) -> Result<Vec<Point3<f64>>, CloudError>;
+
+    /// One reading while fingertip `finger` (0..5: FF, MF, RF, LF, TH) is pressed with
+    /// `force_n` newtons.
+    fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError>;
+
+    /// Opens the hand where the attempt left it and lets the object come to rest; later
+    /// arm moves keep the object where it lies. An error says why there is no retry.
+    fn settle_for_retry(&mut self) -> Result<(), HwError>;
+
+    /// The physics failure of the episode so far, if the engine broke (counted in tables as `grasp eval` counts them).
+    fn physics_failure(&self) -> Option<String>;
+
+    /// The physics failure with its kind, bodies and step, where the engine reports one
+    /// in the Rapier simulator's terms (tables list it as `grasp eval` does); `None`
+    /// otherwise (a failure is then counted with kind `unknown`).
+    fn failure_report(&self) -> Option<FailureReport> {
+        None
+    }
+
+    /// How the last lift ended (height, turn, grip, object in the hand), where the engine
+    /// measures it; tables fill `grasp eval`'s lift statistics from it (zeros without).
+    fn lift_report(&self) -> Option<LiftOutcome> {
+        None
+    }
+
+    /// The deepest penetration of the object by the hand or the table since the hand was
+    /// last placed (m) and what the object touched there, where the engine measures it.
+    fn deepest_contact(&self) -> Option<(f64, String)> {
+        None
+    }
+}
