@@ -19,7 +19,6 @@ use std::collections::HashMap;
 #[derive(Debug)]
 pub struct GruPolicy {
     core: Core,
-    hidden: usize,
     embed: Linear,
     gru: GRU,
     heads: ActorHeads,
@@ -85,8 +84,7 @@ impl GruPolicy {
             )?)
         };
         Ok(Self {
-            core: Core::new(p, obs_dim, actor_dim, spec),
-            hidden: h,
+            core: Core::new(p, obs_dim, actor_dim, spec, h),
             embed,
             gru,
             heads,
@@ -100,10 +98,6 @@ impl ActorCritic for GruPolicy {
         &self.core
     }
 
-    fn hidden_dim(&self) -> usize {
-        self.hidden
-    }
-
     fn forward_seq(
         &self,
         obs: &Tensor,
@@ -111,7 +105,7 @@ impl ActorCritic for GruPolicy {
         h0: Option<&Tensor>,
     ) -> Result<PolicyOutput, PolicyError> {
         let (t, b, d) = obs.dims3()?;
-        let actor_dim = self.core.actor_dim();
+        let (actor_dim, hidden) = (self.core.actor_dim(), self.core.hidden_dim());
         let flat = obs.reshape((t * b, d))?;
         let x = self
             .embed
@@ -121,7 +115,7 @@ impl ActorCritic for GruPolicy {
         let keep = starts.affine(-1.0, 1.0)?.unsqueeze(2)?; // (T, B, 1)
         let mut h = match h0 {
             Some(h) => h.clone(),
-            None => Tensor::zeros((b, self.hidden), DType::F32, &Device::Cpu)?,
+            None => Tensor::zeros((b, hidden), DType::F32, &Device::Cpu)?,
         };
         let mut outs = Vec::with_capacity(t);
         for i in 0..t {
@@ -129,7 +123,7 @@ impl ActorCritic for GruPolicy {
             h = self.gru.step(&x.get(i)?, &GRUState { h: masked })?.h;
             outs.push(h.clone());
         }
-        let hs = Tensor::stack(&outs, 0)?.reshape((t * b, self.hidden))?;
+        let hs = Tensor::stack(&outs, 0)?.reshape((t * b, hidden))?;
         let dist = self.heads.dist(&hs)?;
         let value = match &self.critic {
             Critic::Linear(c) => c.forward(&hs)?.squeeze(1)?,

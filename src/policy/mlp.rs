@@ -36,7 +36,7 @@ impl MlpPolicy {
         let heads = ActorHeads::new(&mut p, cfg, h, spec, &mut rng)?;
         let critic = MlpCritic::new(&mut p, obs_dim, h, &mut rng)?;
         Ok(Self {
-            core: Core::new(p, obs_dim, actor_dim, spec),
+            core: Core::new(p, obs_dim, actor_dim, spec, 0),
             actor,
             heads,
             critic,
@@ -47,10 +47,6 @@ impl MlpPolicy {
 impl ActorCritic for MlpPolicy {
     fn core(&self) -> &Core {
         &self.core
-    }
-
-    fn hidden_dim(&self) -> usize {
-        0
     }
 
     fn forward_seq(

@@ -194,7 +194,9 @@ pub trait ActorCritic: Send + Sync {
         self.core().action_spec()
     }
     /// Size of the recurrent state, 0 for a feed-forward network.
-    fn hidden_dim(&self) -> usize;
+    fn hidden_dim(&self) -> usize {
+        self.core().hidden_dim()
+    }
     /// The trainable parameters by name.
     fn params(&self) -> &Params {
         self.core().params()

@@ -12,24 +12,33 @@ use rand_chacha::ChaCha8Rng;
 
 /// What every actor-critic holds besides its layers: its parameters by name, the length
 /// of the observation it reads, how much of it the actor reads (the first values; the
-/// rest only the critic) and the shape of its actions.
+/// rest only the critic), the shape of its actions and the size of its recurrent state.
 #[derive(Debug)]
 pub struct Core {
     params: Params,
     obs_dim: usize,
     actor_dim: usize,
     spec: ActionSpec,
+    hidden: usize,
 }
 
 impl Core {
     /// The network's parameters `params` for observations of `obs_dim` values, of which
-    /// the actor reads the first `actor_dim`, and actions `spec`.
-    pub(super) fn new(params: Params, obs_dim: usize, actor_dim: usize, spec: ActionSpec) -> Self {
+    /// the actor reads the first `actor_dim`, actions `spec` and a recurrent state of
+    /// `hidden` values (0: feed-forward).
+    pub(super) fn new(
+        params: Params,
+        obs_dim: usize,
+        actor_dim: usize,
+        spec: ActionSpec,
+        hidden: usize,
+    ) -> Self {
         Self {
             params,
             obs_dim,
             actor_dim,
             spec,
+            hidden,
         }
     }
 
@@ -51,6 +60,11 @@ impl Core {
     /// The shape of the actions.
     pub fn action_spec(&self) -> ActionSpec {
         self.spec
+    }
+
+    /// Size of the recurrent state, 0 for a feed-forward network.
+    pub fn hidden_dim(&self) -> usize {
+        self.hidden
     }
 }
 
