@@ -27,11 +27,11 @@ fn run(label: &str, trainer: &mut Trainer, updates: usize) -> Vec<UpdateMetrics>
             "{label} update {:3} step {:6} return {:7.1} len {:6.1} success {:?} kl {:.4} ev {:?} {:.0} tr/s",
             m.update,
             m.global_step,
-            m.mean_return.unwrap_or(f64::NAN),
-            m.mean_length.unwrap_or(f64::NAN),
-            m.success_rate,
-            m.approx_kl,
-            m.explained_variance,
+            m.stats.episode_return.unwrap_or(f64::NAN),
+            m.stats.episode_length.unwrap_or(f64::NAN),
+            m.stats.success_rate,
+            m.stats.approx_kl,
+            m.stats.explained_variance,
             m.transitions_per_sec
         );
         out.push(m);
@@ -45,7 +45,7 @@ fn late_return(ms: &[UpdateMetrics], k: usize) -> f64 {
         .iter()
         .rev()
         .take(k)
-        .filter_map(|m| m.mean_return)
+        .filter_map(|m| m.stats.episode_return)
         .collect();
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
@@ -95,7 +95,7 @@ fn mlp_learns_cartpole() {
     let updates = cfg.num_updates() as usize;
     let mut t = Trainer::new(cfg, cartpoles(8, 200)).unwrap();
     let ms = run("mlp", &mut t, updates);
-    let first = ms[0].mean_return.unwrap();
+    let first = ms[0].stats.episode_return.unwrap();
     let last = late_return(&ms, 5);
     println!("mlp: first {first:.1}, last {last:.1}");
     assert!(first < 40.0, "random level should be low: {first}");
@@ -108,7 +108,7 @@ fn gru_learns_cartpole() {
     let updates = cfg.num_updates() as usize;
     let mut t = Trainer::new(cfg, cartpoles(8, 200)).unwrap();
     let ms = run("gru", &mut t, updates);
-    let first = ms[0].mean_return.unwrap();
+    let first = ms[0].stats.episode_return.unwrap();
     let last = late_return(&ms, 5);
     println!("gru: first {first:.1}, last {last:.1}");
     assert!(first < 40.0, "random level should be low: {first}");
@@ -190,7 +190,7 @@ fn lift_head_learns_when_to_stop() {
         .collect();
     let mut t = Trainer::new(cfg, envs).unwrap();
     let ms = run("lift", &mut t, updates);
-    let rate = |m: &UpdateMetrics| m.success_rate.unwrap();
+    let rate = |m: &UpdateMetrics| m.stats.success_rate.unwrap();
     let first = rate(&ms[0]);
     let last: f64 = ms.iter().rev().take(5).map(rate).sum::<f64>() / 5.0;
     println!("lift: first success {first:.2}, last {last:.2}");

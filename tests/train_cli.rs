@@ -74,7 +74,7 @@ fn cartpole_run_writes_the_run_folder_and_resumes() {
     assert_eq!(rows[2].global_step, 192);
     assert!(rows
         .iter()
-        .all(|r| r.curriculum_level.is_none() && r.success_rate.is_none()));
+        .all(|r| r.curriculum_level.is_none() && r.stats.success_rate.is_none()));
     // TensorBoard: a version record and one scalar event per update, CRCs valid.
     let ev: Vec<PathBuf> = std::fs::read_dir(&run)
         .unwrap()

@@ -146,10 +146,12 @@ pub fn run(a: TrainArgs, g: &Global) -> Result<()> {
             bar.set_position(p.row.global_step);
             let succ = p
                 .row
+                .stats
                 .success_rate
                 .map_or_else(|| "-".into(), |s| format!("{:.0}%", 100.0 * s));
             let ret = p
                 .row
+                .stats
                 .episode_return
                 .map_or_else(|| "-".into(), |r| format!("{r:.1}"));
             bar.set_message(format!(

@@ -57,11 +57,42 @@ pub const N_SURFACE: usize = 18;
 /// Number of torque levels.
 pub const N_LEVELS: usize = 6;
 
-/// A named slice of the observation vector, for documentation and debugging.
+/// What a segment of one frame holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentKind {
+    /// `a_{k-1}`: the previous continuous action, clipped to [-1, 1].
+    PrevAction,
+    /// `phi`: the fingertip contacts, 0 or 1.
+    Tactile,
+    /// `tau`: the actuator torque levels, scaled to [0, 1].
+    TorqueLevels,
+    /// M3G's surface vectors ([`surface_vectors`]).
+    Surface,
+    /// `theta`: the joint angles (rad).
+    JointAngles,
+}
+
+impl SegmentKind {
+    /// The segment's name: `prev_action`, `tactile`, `torque_levels`, `surface` or
+    /// `joint_angles`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SegmentKind::PrevAction => "prev_action",
+            SegmentKind::Tactile => "tactile",
+            SegmentKind::TorqueLevels => "torque_levels",
+            SegmentKind::Surface => "surface",
+            SegmentKind::JointAngles => "joint_angles",
+        }
+    }
+}
+
+/// A slice of the observation vector: what it holds and where.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Segment {
-    /// What the values are.
-    pub name: &'static str,
+    /// What the values are (serialised as its name).
+    #[serde(rename = "name")]
+    pub kind: SegmentKind,
     /// Offset inside one frame.
     pub offset: usize,
     /// Number of values.
@@ -111,25 +142,25 @@ impl ObsLayout {
     ) -> Self {
         let mut segments = Vec::new();
         let mut off = 0;
-        let mut push = |name, len| {
+        let mut push = |kind, len| {
             segments.push(Segment {
-                name,
+                kind,
                 offset: off,
                 len,
             });
             off += len;
         };
-        push("prev_action", action_len);
+        push(SegmentKind::PrevAction, action_len);
         if modality != Modality::M1 {
-            push("tactile", N_TACTILE);
+            push(SegmentKind::Tactile, N_TACTILE);
         }
         if matches!(modality, Modality::M3 | Modality::M3G) {
-            push("torque_levels", N_TORQUE);
+            push(SegmentKind::TorqueLevels, N_TORQUE);
         }
         if modality == Modality::M3G {
-            push("surface", N_SURFACE);
+            push(SegmentKind::Surface, N_SURFACE);
         }
-        push("joint_angles", N_JOINTS);
+        push(SegmentKind::JointAngles, N_JOINTS);
         ObsLayout {
             modality,
             n_components,
@@ -177,17 +208,18 @@ impl ObsLayout {
     ) -> Vec<f32> {
         let mut out = Vec::with_capacity(self.frame_len());
         for s in &self.segments {
-            match s.name {
-                "prev_action" => {
+            match s.kind {
+                SegmentKind::PrevAction => {
                     out.extend((0..s.len).map(|k| prev_action.get(k).copied().unwrap_or(0.0)))
                 }
-                "tactile" => out.extend(tactile.iter().map(|&t| if t { 1.0 } else { 0.0 })),
-                "torque_levels" => {
+                SegmentKind::Tactile => {
+                    out.extend(tactile.iter().map(|&t| if t { 1.0 } else { 0.0 }))
+                }
+                SegmentKind::TorqueLevels => {
                     out.extend(torque_levels.iter().map(|&l| f32::from(l.min(5)) / 5.0))
                 }
-                "joint_angles" => out.extend(joint_angles.iter().map(|&a| a as f32)),
-                "surface" => out.extend(surface.iter().map(|&v| v as f32)),
-                _ => unreachable!("unknown segment"),
+                SegmentKind::JointAngles => out.extend(joint_angles.iter().map(|&a| a as f32)),
+                SegmentKind::Surface => out.extend(surface.iter().map(|&v| v as f32)),
             }
         }
         out
@@ -363,6 +395,29 @@ mod tests {
         assert_eq!(f.len(), 5 + 5 + 20 + 18 + 24);
         assert_eq!((f[30], f[47], f[71]), (0.02, -0.05, 1.5));
         assert_eq!(g.frame_len(), 72);
+    }
+
+    #[test]
+    fn segments_serialise_with_their_names_in_order() {
+        let g = ObsLayout::new(Modality::M3G, 5, 3);
+        let v = serde_json::to_value(&g.segments).unwrap();
+        let names: Vec<&str> = g.segments.iter().map(|s| s.kind.name()).collect();
+        assert_eq!(
+            names,
+            [
+                "prev_action",
+                "tactile",
+                "torque_levels",
+                "surface",
+                "joint_angles"
+            ]
+        );
+        for (s, j) in g.segments.iter().zip(v.as_array().unwrap()) {
+            assert_eq!(j["name"], s.kind.name());
+            assert_eq!(j["offset"], s.offset);
+            assert_eq!(j["len"], s.len);
+        }
+        assert_eq!(v[3]["offset"], 7 + 5 + 20);
     }
 
     #[test]

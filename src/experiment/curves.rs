@@ -10,7 +10,7 @@ use crate::train::MetricsRow;
 pub fn success_curve(rows: &[MetricsRow], window: usize) -> Vec<(f64, f64)> {
     let raw: Vec<(f64, f64)> = rows
         .iter()
-        .filter_map(|r| r.success_rate.map(|s| (r.global_step as f64, s)))
+        .filter_map(|r| r.stats.success_rate.map(|s| (r.global_step as f64, s)))
         .collect();
     let w = window.max(1);
     (0..raw.len())
@@ -111,7 +111,7 @@ pub fn aggregate(label: &str, curves: &[Vec<(f64, f64)>], band: Band) -> Option<
 /// The final training success of one run: the mean success rate of the last `window`
 /// updates that finished episodes; `None` without any.
 pub fn final_success(rows: &[MetricsRow], window: usize) -> Option<f64> {
-    let v: Vec<f64> = rows.iter().filter_map(|r| r.success_rate).collect();
+    let v: Vec<f64> = rows.iter().filter_map(|r| r.stats.success_rate).collect();
     let tail = &v[v.len().saturating_sub(window.max(1))..];
     mean_std(tail).map(|m| m.0)
 }
@@ -119,21 +119,17 @@ pub fn final_success(rows: &[MetricsRow], window: usize) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ppo::UpdateStats;
 
     fn row(step: u64, s: Option<f64>) -> MetricsRow {
         MetricsRow {
             update: step,
             global_step: step,
             episodes: step,
-            success_rate: s,
-            episode_return: None,
-            episode_length: None,
-            policy_loss: 0.0,
-            value_loss: 0.0,
-            entropy: 0.0,
-            approx_kl: 0.0,
-            clip_fraction: 0.0,
-            explained_variance: None,
+            stats: UpdateStats {
+                success_rate: s,
+                ..UpdateStats::default()
+            },
             curriculum_level: None,
             transitions_per_s: 1.0,
             wall_s: 1.0,

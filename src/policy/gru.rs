@@ -2,9 +2,9 @@
 //! actor and the critic, then the heads (the layout of CleanRL's `ppo_atari_lstm`, with a
 //! GRU as in the paper).
 
+use super::parts::{ActorHeads, Core, MlpCritic};
 use super::{
-    ActionDist, ActorCritic, Params, PolicyConfig, PolicyError, PolicyOutput, GAIN_ACTOR,
-    GAIN_CRITIC, GAIN_HIDDEN,
+    ActorCritic, Params, PolicyConfig, PolicyError, PolicyOutput, GAIN_CRITIC, GAIN_HIDDEN,
 };
 use crate::env::api::ActionSpec;
 use candle_core::{DType, Device, Module, Tensor};
@@ -18,18 +18,11 @@ use std::collections::HashMap;
 /// `actor.lift` and `critic`. The recurrent state is zeroed at every episode start.
 #[derive(Debug)]
 pub struct GruPolicy {
-    params: Params,
-    obs_dim: usize,
-    spec: ActionSpec,
-    hidden: usize,
+    core: Core,
     embed: Linear,
     gru: GRU,
-    actor_mean: Linear,
-    actor_lift: Option<Linear>,
-    log_std: Tensor,
+    heads: ActorHeads,
     critic: Critic,
-    /// Observation values the actor reads (the first ones); the rest only the critic.
-    actor_dim: usize,
 }
 
 /// The GRU policy's value head: linear on the GRU state, or with an asymmetric critic a
@@ -37,11 +30,7 @@ pub struct GruPolicy {
 #[derive(Debug)]
 enum Critic {
     Linear(Linear),
-    Asymmetric {
-        fc1: Linear,
-        fc2: Linear,
-        out: Linear,
-    },
+    Asymmetric(MlpCritic),
 }
 
 impl GruPolicy {
@@ -54,84 +43,59 @@ impl GruPolicy {
     ) -> Result<Self, PolicyError> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut p = Params::default();
-        let (e, h, c) = (cfg.embed_dim, cfg.gru_hidden, spec.continuous);
+        let (e, h) = (cfg.embed_dim, cfg.gru_hidden);
         let actor_dim = obs_dim - cfg.critic_state;
         let embed = p.linear("embed", actor_dim, e, GAIN_HIDDEN, &mut rng)?;
+        // The GRU's tensors are saved as `gru.<name>` and handed to candle's GRU as
+        // `<name>`, the names it looks up.
         let mut gru_ts = HashMap::new();
-        gru_ts.insert(
-            "weight_ih_l0".to_string(),
-            p.add(
-                "gru.weight_ih_l0",
+        for (name, data, shape) in [
+            (
+                "weight_ih_l0",
                 super::init::orthogonal(3 * h, e, 1.0, &mut rng),
-                &[3 * h, e],
-            )?,
-        );
-        gru_ts.insert(
-            "weight_hh_l0".to_string(),
-            p.add(
-                "gru.weight_hh_l0",
+                [3 * h, e],
+            ),
+            (
+                "weight_hh_l0",
                 super::init::orthogonal(3 * h, h, 1.0, &mut rng),
-                &[3 * h, h],
-            )?,
-        );
-        gru_ts.insert(
-            "bias_ih_l0".to_string(),
-            p.add("gru.bias_ih_l0", vec![0.0; 3 * h], &[3 * h])?,
-        );
-        gru_ts.insert(
-            "bias_hh_l0".to_string(),
-            p.add("gru.bias_hh_l0", vec![0.0; 3 * h], &[3 * h])?,
-        );
+                [3 * h, h],
+            ),
+        ] {
+            gru_ts.insert(
+                name.to_string(),
+                p.add(&format!("gru.{name}"), data, &shape)?,
+            );
+        }
+        for name in ["bias_ih_l0", "bias_hh_l0"] {
+            let bias = p.add(&format!("gru.{name}"), vec![0.0; 3 * h], &[3 * h])?;
+            gru_ts.insert(name.to_string(), bias);
+        }
         let vb = VarBuilder::from_tensors(gru_ts, DType::F32, &Device::Cpu);
         let gru = candle_nn::rnn::gru(e, h, GRUConfig::default(), vb)?;
-        let actor_mean = p.linear("actor.mean", h, c, GAIN_ACTOR, &mut rng)?;
-        let actor_lift = if spec.lift {
-            Some(p.linear_biased("actor.lift", h, 1, GAIN_ACTOR, cfg.init_lift_bias, &mut rng)?)
-        } else {
-            None
-        };
-        let log_std = p.add("actor.log_std", vec![cfg.init_log_std; c], &[c])?;
+        let heads = ActorHeads::new(&mut p, cfg, h, spec, &mut rng)?;
         let critic = if cfg.critic_state == 0 {
             Critic::Linear(p.linear("critic", h, 1, GAIN_CRITIC, &mut rng)?)
         } else {
-            let m = cfg.mlp_hidden;
-            Critic::Asymmetric {
-                fc1: p.linear("critic.fc1", h + cfg.critic_state, m, GAIN_HIDDEN, &mut rng)?,
-                fc2: p.linear("critic.fc2", m, m, GAIN_HIDDEN, &mut rng)?,
-                out: p.linear("critic.out", m, 1, GAIN_CRITIC, &mut rng)?,
-            }
+            Critic::Asymmetric(MlpCritic::new(
+                &mut p,
+                h + cfg.critic_state,
+                cfg.mlp_hidden,
+                &mut rng,
+            )?)
         };
         Ok(Self {
-            params: p,
-            obs_dim,
-            spec,
-            hidden: h,
+            core: Core::new(p, obs_dim, actor_dim, spec, h),
             embed,
             gru,
-            actor_mean,
-            actor_lift,
-            log_std,
+            heads,
             critic,
-            actor_dim,
         })
     }
 }
 
 impl ActorCritic for GruPolicy {
-    fn obs_dim(&self) -> usize {
-        self.obs_dim
-    }
-
-    fn action_spec(&self) -> ActionSpec {
-        self.spec
-    }
-
-    fn hidden_dim(&self) -> usize {
-        self.hidden
-    }
-
-    fn params(&self) -> &Params {
-        &self.params
+    fn core(&self) -> &Core {
+        &self.core
     }
 
     fn forward_seq(
@@ -141,16 +105,17 @@ impl ActorCritic for GruPolicy {
         h0: Option<&Tensor>,
     ) -> Result<PolicyOutput, PolicyError> {
         let (t, b, d) = obs.dims3()?;
+        let (actor_dim, hidden) = (self.core.actor_dim(), self.core.hidden_dim());
         let flat = obs.reshape((t * b, d))?;
         let x = self
             .embed
-            .forward(&flat.narrow(1, 0, self.actor_dim)?)?
+            .forward(&flat.narrow(1, 0, actor_dim)?)?
             .tanh()?
             .reshape((t, b, ()))?;
         let keep = starts.affine(-1.0, 1.0)?.unsqueeze(2)?; // (T, B, 1)
         let mut h = match h0 {
             Some(h) => h.clone(),
-            None => Tensor::zeros((b, self.hidden), DType::F32, &Device::Cpu)?,
+            None => Tensor::zeros((b, hidden), DType::F32, &Device::Cpu)?,
         };
         let mut outs = Vec::with_capacity(t);
         for i in 0..t {
@@ -158,27 +123,17 @@ impl ActorCritic for GruPolicy {
             h = self.gru.step(&x.get(i)?, &GRUState { h: masked })?.h;
             outs.push(h.clone());
         }
-        let hs = Tensor::stack(&outs, 0)?.reshape((t * b, self.hidden))?;
-        let mean = self.actor_mean.forward(&hs)?;
-        let lift_logit = match &self.actor_lift {
-            Some(l) => Some(l.forward(&hs)?.squeeze(1)?),
-            None => None,
-        };
+        let hs = Tensor::stack(&outs, 0)?.reshape((t * b, hidden))?;
+        let dist = self.heads.dist(&hs)?;
         let value = match &self.critic {
-            Critic::Linear(c) => c.forward(&hs)?,
-            Critic::Asymmetric { fc1, fc2, out } => {
-                let extra = flat.narrow(1, self.actor_dim, d - self.actor_dim)?;
-                let z = Tensor::cat(&[&hs, &extra], 1)?;
-                out.forward(&fc2.forward(&fc1.forward(&z)?.tanh()?)?.tanh()?)?
+            Critic::Linear(c) => c.forward(&hs)?.squeeze(1)?,
+            Critic::Asymmetric(c) => {
+                let extra = flat.narrow(1, actor_dim, d - actor_dim)?;
+                c.value(&Tensor::cat(&[&hs, &extra], 1)?)?
             }
-        }
-        .squeeze(1)?;
+        };
         Ok(PolicyOutput {
-            dist: ActionDist {
-                mean,
-                log_std: self.log_std.clone(),
-                lift_logit,
-            },
+            dist,
             value,
             hidden: Some(h),
         })

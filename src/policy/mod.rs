@@ -17,10 +17,12 @@ pub mod dist;
 mod gru;
 pub mod init;
 mod mlp;
+mod parts;
 
 pub use dist::{ActionDist, SampledActions};
 pub use gru::GruPolicy;
 pub use mlp::MlpPolicy;
+pub use parts::Core;
 
 use crate::env::api::ActionSpec;
 use candle_core::{DType, Device, Tensor, Var};
@@ -181,14 +183,24 @@ pub struct PolicyOutput {
 
 /// An actor-critic network.
 pub trait ActorCritic: Send + Sync {
+    /// Its parameters, observation length and action shape.
+    fn core(&self) -> &Core;
     /// Length of the (stacked) observation vector it reads.
-    fn obs_dim(&self) -> usize;
+    fn obs_dim(&self) -> usize {
+        self.core().obs_dim()
+    }
     /// The shape of the actions it outputs.
-    fn action_spec(&self) -> ActionSpec;
+    fn action_spec(&self) -> ActionSpec {
+        self.core().action_spec()
+    }
     /// Size of the recurrent state, 0 for a feed-forward network.
-    fn hidden_dim(&self) -> usize;
+    fn hidden_dim(&self) -> usize {
+        self.core().hidden_dim()
+    }
     /// The trainable parameters by name.
-    fn params(&self) -> &Params;
+    fn params(&self) -> &Params {
+        self.core().params()
+    }
     /// Runs the network over a sequence: `obs` (T, B, obs_dim), `starts` (T, B) with 1.0
     /// where an observation is the first of an episode (the recurrent state is zeroed
     /// there, `h = h * (1 - start)`, before the step), and the initial recurrent state `h0`
@@ -365,6 +377,153 @@ mod tests {
         };
         assert_eq!(w(m.as_ref()), w(m2.as_ref()));
         assert_ne!(w(m.as_ref()), w(m3.as_ref()));
+    }
+
+    /// A parameter's name, shape and a weighted sum of its values.
+    type Fingerprint = (&'static str, Vec<usize>, f64);
+    /// A network's label, its parameters' fingerprints and its outputs.
+    type Pinned = (&'static str, Vec<Fingerprint>, [Vec<f32>; 4]);
+
+    /// Every parameter's name and shape, and a weighted sum of its initial values: a
+    /// change of a name, a shape or the order in which layers draw from the RNG shows.
+    fn fingerprint(p: &dyn ActorCritic) -> Vec<(String, Vec<usize>, f64)> {
+        p.params()
+            .vars()
+            .iter()
+            .map(|(name, v)| {
+                let vals = v.flatten_all().unwrap().to_vec1::<f32>().unwrap();
+                let sum = vals
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &x)| (i as f64 + 1.0) * f64::from(x))
+                    .sum::<f64>();
+                (name.clone(), v.dims().to_vec(), (sum * 1e6).round() / 1e6)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn names_shapes_and_initial_values_are_pinned() {
+        let spec = ActionSpec {
+            continuous: 2,
+            lift: true,
+        };
+        let small = PolicyConfig {
+            mlp_hidden: 4,
+            embed_dim: 5,
+            gru_hidden: 3,
+            ..PolicyConfig::default()
+        };
+        let gru = build_policy(&small, 6, spec, 7).unwrap();
+        let asym = PolicyConfig {
+            critic_state: 2,
+            ..small.clone()
+        };
+        let gru_asym = build_policy(&asym, 6, spec, 7).unwrap();
+        let mlp_cfg = PolicyConfig {
+            kind: PolicyKind::Mlp,
+            ..asym.clone()
+        };
+        let mlp = build_policy(&mlp_cfg, 6, spec, 7).unwrap();
+        // As built on 2026-12-07, before the shared heads were factored out: every
+        // parameter's fingerprint, then the value, mean, lift logit and log std of two
+        // steps of one sequence.
+        let expected: [Pinned; 3] = [
+            (
+                "gru",
+                vec![
+                    ("actor.lift.bias", vec![1], 0.0),
+                    ("actor.lift.weight", vec![1, 3], -0.00814),
+                    ("actor.log_std", vec![2], 0.0),
+                    ("actor.mean.bias", vec![2], 0.0),
+                    ("actor.mean.weight", vec![2, 3], -0.035705),
+                    ("critic.bias", vec![1], 0.0),
+                    ("critic.weight", vec![1, 3], -3.265579),
+                    ("embed.bias", vec![5], 0.0),
+                    ("embed.weight", vec![5, 6], -69.196265),
+                    ("gru.bias_hh_l0", vec![9], 0.0),
+                    ("gru.bias_ih_l0", vec![9], 0.0),
+                    ("gru.weight_hh_l0", vec![9, 3], 59.133893),
+                    ("gru.weight_ih_l0", vec![9, 5], -16.031253),
+                ],
+                [
+                    vec![-0.17405862, -0.31241134],
+                    vec![0.0005502603, -0.005244564, -0.00018074279, -0.0005290385],
+                    vec![9.471923e-5, 0.0011741678],
+                    vec![0.0, 0.0],
+                ],
+            ),
+            (
+                "gru_asym",
+                vec![
+                    ("actor.lift.bias", vec![1], 0.0),
+                    ("actor.lift.weight", vec![1, 3], 0.037291),
+                    ("actor.log_std", vec![2], 0.0),
+                    ("actor.mean.bias", vec![2], 0.0),
+                    ("actor.mean.weight", vec![2, 3], -0.021283),
+                    ("critic.fc1.bias", vec![4], 0.0),
+                    ("critic.fc1.weight", vec![4, 5], 34.845084),
+                    ("critic.fc2.bias", vec![4], 0.0),
+                    ("critic.fc2.weight", vec![4, 4], -2.569649),
+                    ("critic.out.bias", vec![1], 0.0),
+                    ("critic.out.weight", vec![1, 4], 3.309478),
+                    ("embed.bias", vec![5], 0.0),
+                    ("embed.weight", vec![5, 4], -48.637947),
+                    ("gru.bias_hh_l0", vec![9], 0.0),
+                    ("gru.bias_ih_l0", vec![9], 0.0),
+                    ("gru.weight_hh_l0", vec![9, 3], 31.560289),
+                    ("gru.weight_ih_l0", vec![9, 5], 36.823641),
+                ],
+                [
+                    vec![0.40855882, -0.56749964],
+                    vec![0.003205336, 0.001268339, -0.0007511589, -0.0021009208],
+                    vec![0.0018625228, 0.00062666694],
+                    vec![0.0, 0.0],
+                ],
+            ),
+            (
+                "mlp",
+                vec![
+                    ("actor.fc1.bias", vec![4], 0.0),
+                    ("actor.fc1.weight", vec![4, 4], -38.477521),
+                    ("actor.fc2.bias", vec![4], 0.0),
+                    ("actor.fc2.weight", vec![4, 4], -26.49605),
+                    ("actor.lift.bias", vec![1], 0.0),
+                    ("actor.lift.weight", vec![1, 4], 0.042785),
+                    ("actor.log_std", vec![2], 0.0),
+                    ("actor.mean.bias", vec![2], 0.0),
+                    ("actor.mean.weight", vec![2, 4], -0.108429),
+                    ("critic.fc1.bias", vec![4], 0.0),
+                    ("critic.fc1.weight", vec![4, 6], -15.844281),
+                    ("critic.fc2.bias", vec![4], 0.0),
+                    ("critic.fc2.weight", vec![4, 4], 14.327609),
+                    ("critic.out.bias", vec![1], 0.0),
+                    ("critic.out.weight", vec![1, 4], 0.988961),
+                ],
+                [
+                    vec![-0.71734565, -0.055018336],
+                    vec![-0.007408689, -0.0060944017, -0.0002728867, -0.009519849],
+                    vec![0.007073329, 0.0016121143],
+                    vec![0.0, 0.0],
+                ],
+            ),
+        ];
+        for (p, (label, params, outputs)) in [gru, gru_asym, mlp].iter().zip(expected) {
+            let got = fingerprint(p.as_ref());
+            let want: Vec<(String, Vec<usize>, f64)> = params
+                .into_iter()
+                .map(|(n, s, v)| (n.to_string(), s, v))
+                .collect();
+            assert_eq!(got, want, "{label}");
+            let obs: Vec<f32> = (0..12).map(|i| (i as f32 * 0.37).sin()).collect();
+            let obs = Tensor::from_vec(obs, (2, 1, 6), &Device::Cpu).unwrap();
+            let starts = Tensor::new(&[[1f32], [0.0]], &Device::Cpu).unwrap();
+            let out = p.forward_seq(&obs, &starts, None).unwrap();
+            let v = |t: &Tensor| t.flatten_all().unwrap().to_vec1::<f32>().unwrap();
+            let lift = v(out.dist.lift_logit.as_ref().unwrap());
+            let got = [v(&out.value), v(&out.dist.mean), lift, v(&out.dist.log_std)];
+            assert_eq!(got, outputs, "{label}");
+        }
     }
 
     #[test]

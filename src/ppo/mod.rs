@@ -10,7 +10,7 @@
 //! let envs: Vec<Box<dyn Env>> = (0..4).map(|_| Box::new(CartPole::default()) as Box<dyn Env>).collect();
 //! let mut trainer = Trainer::new(cfg, envs)?;
 //! let m = trainer.train_update()?;
-//! println!("update {} mean return {:?}", m.update, m.mean_return);
+//! println!("update {} mean return {:?}", m.update, m.stats.episode_return);
 //! trainer.save_checkpoint(std::path::Path::new("runs/demo"))?;
 //! # Ok::<(), grasp::ppo::PpoError>(())
 //! ```
@@ -25,7 +25,7 @@ pub mod trainer;
 
 pub use checkpoint::{load_policy, read_checkpoint_config, LoadedPolicy, CHECKPOINT_FILE};
 pub use config::PpoConfig;
-pub use trainer::{Trainer, UpdateMetrics};
+pub use trainer::{Trainer, UpdateMetrics, UpdateStats};
 
 use std::path::PathBuf;
 

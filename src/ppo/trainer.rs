@@ -32,25 +32,18 @@ use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// What one update measured.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct UpdateMetrics {
-    /// Index of the update, from 1.
-    pub update: u64,
-    /// Environment transitions collected so far.
-    pub global_step: u64,
-    /// Learning rate used.
-    pub learning_rate: f64,
-    /// Episodes that finished during the rollout.
-    pub episodes: usize,
-    /// Mean raw return of those episodes (`None` when none finished).
-    pub mean_return: Option<f64>,
-    /// Mean length of those episodes.
-    pub mean_length: Option<f64>,
-    /// Fraction of those episodes reporting success (`None` when none reported).
+/// What one update measured of its episodes and of its optimisation: the part of
+/// [`UpdateMetrics`] that a run's `metrics.csv` records in its columns `success_rate` to
+/// `explained_variance` (`crate::train::MetricsRow`). The default: no episode, all losses 0.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct UpdateStats {
+    /// Fraction of the episodes that finished during the rollout reporting success
+    /// (`None` when none reported).
     pub success_rate: Option<f64>,
-    /// Episodes that ended in a physics failure.
-    pub physics_failures: usize,
+    /// Mean raw return of those episodes (`None` when none finished).
+    pub episode_return: Option<f64>,
+    /// Mean length of those episodes.
+    pub episode_length: Option<f64>,
     /// Clipped surrogate loss, mean over minibatches.
     pub policy_loss: f64,
     /// Value loss (with the 0.5 factor), mean over minibatches.
@@ -63,6 +56,24 @@ pub struct UpdateMetrics {
     pub clip_fraction: f64,
     /// `1 - Var(returns - values) / Var(returns)` over the rollout (`None` if Var = 0).
     pub explained_variance: Option<f64>,
+}
+
+/// What one update measured.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UpdateMetrics {
+    /// Index of the update, from 1.
+    pub update: u64,
+    /// Environment transitions collected so far.
+    pub global_step: u64,
+    /// Learning rate used.
+    pub learning_rate: f64,
+    /// Episodes that finished during the rollout.
+    pub episodes: usize,
+    /// Episodes that ended in a physics failure.
+    pub physics_failures: usize,
+    /// The episodes' success, return and length, and the optimisation's losses.
+    #[serde(flatten)]
+    pub stats: UpdateStats,
     /// Gradient norm before clipping, mean over minibatches.
     pub grad_norm: f64,
     /// Epochs run (fewer than `update_epochs` when `target_kl` stopped them).
@@ -312,16 +323,18 @@ impl Trainer {
             global_step: self.global_step,
             learning_rate: lr,
             episodes: n_ep,
-            mean_return: mean(&|e| e.ret),
-            mean_length: mean(&|e| e.length as f64),
-            success_rate,
             physics_failures: episodes.iter().filter(|e| e.physics_failure).count(),
-            policy_loss: s.policy_loss / k,
-            value_loss: s.value_loss / k,
-            entropy: s.entropy / k,
-            approx_kl: s.approx_kl / k,
-            clip_fraction: s.clipped as f64 / s.samples.max(1) as f64,
-            explained_variance: explained_variance(&buf.values, ret),
+            stats: UpdateStats {
+                success_rate,
+                episode_return: mean(&|e| e.ret),
+                episode_length: mean(&|e| e.length as f64),
+                policy_loss: s.policy_loss / k,
+                value_loss: s.value_loss / k,
+                entropy: s.entropy / k,
+                approx_kl: s.approx_kl / k,
+                clip_fraction: s.clipped as f64 / s.samples.max(1) as f64,
+                explained_variance: explained_variance(&buf.values, ret),
+            },
             grad_norm: s.grad_norm / k,
             epochs: s.epochs,
             rollout_secs,

@@ -109,6 +109,19 @@ pub fn resolve(source: Source<'_>, o: &Overrides) -> PyResult<TrainConfig> {
     Ok(cfg)
 }
 
+/// The config of an environment's Python arguments `config` (a file) and `config_toml`
+/// (its text), at most one of them, with the overrides `o`: resolved, validated, and as
+/// TOML with every default filled in.
+pub fn load(
+    config: Option<&Path>,
+    config_toml: Option<&str>,
+    o: &Overrides,
+) -> PyResult<(TrainConfig, String)> {
+    let cfg = resolve(Source::of(config, config_toml)?, o)?;
+    let toml = cfg.to_toml_string().map_err(config_error)?;
+    Ok((cfg, toml))
+}
+
 /// The built-in config's TOML text (`configs/base.toml`).
 #[pyfunction]
 pub fn builtin_config_toml() -> &'static str {
@@ -120,10 +133,5 @@ pub fn builtin_config_toml() -> &'static str {
 #[pyfunction]
 #[pyo3(signature = (config=None))]
 pub fn resolved_config_toml(config: Option<PathBuf>) -> PyResult<String> {
-    let source = match &config {
-        Some(p) => Source::File(p),
-        None => Source::Builtin,
-    };
-    let cfg = resolve(source, &Overrides::default())?;
-    cfg.to_toml_string().map_err(config_error)
+    Ok(load(config.as_deref(), None, &Overrides::default())?.1)
 }

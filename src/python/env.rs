@@ -3,7 +3,7 @@
 //! scripted baselines on its scenes.
 
 use super::actions::{decode, f32_bytes};
-use super::config::{resolve, Overrides, Source};
+use super::config::{load, Overrides};
 use super::error::{config_error, locked, no_panic};
 use crate::env::api::Env;
 use crate::env::grasp::{EpisodeSummary, GraspEnv};
@@ -87,8 +87,7 @@ impl CoreEnv {
             difficulty,
             ..Overrides::default()
         };
-        let cfg = resolve(Source::of(config.as_deref(), config_toml.as_deref())?, &o)?;
-        let config_toml = cfg.to_toml_string().map_err(config_error)?;
+        let (cfg, config_toml) = load(config.as_deref(), config_toml.as_deref(), &o)?;
         let (mut envs, _) = py
             .detach(|| no_panic("building the environment", || grasp_envs(&cfg, 1)))?
             .map_err(config_error)?;

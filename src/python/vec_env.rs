@@ -4,7 +4,7 @@
 //! [`VecEnv`] with the GIL released, resetting finished episodes on the same step.
 
 use super::actions::{decode, f32_bytes};
-use super::config::{resolve, Overrides, Source};
+use super::config::{load, Overrides};
 use super::error::{config_error, env_error, locked, no_panic};
 use crate::env::api::VecEnv;
 use crate::env::grasp::{EpisodeSummary, GraspEnv};
@@ -97,8 +97,7 @@ impl CoreVecEnv {
             seed,
             difficulty,
         };
-        let cfg = resolve(Source::of(config.as_deref(), config_toml.as_deref())?, &o)?;
-        let config_toml = cfg.to_toml_string().map_err(config_error)?;
+        let (cfg, config_toml) = load(config.as_deref(), config_toml.as_deref(), &o)?;
         let threads = cfg.env_threads();
         let TrainEnvs { envs, levels, .. } = py
             .detach(|| no_panic("building the environments", || build_envs(&cfg)))?

@@ -11,6 +11,7 @@
 //! Files written before the last column existed ([`HEADER_V1`]) are read with 0 failures.
 
 use super::TrainError;
+use crate::ppo::{UpdateMetrics, UpdateStats};
 use std::path::Path;
 
 /// The CSV header.
@@ -35,24 +36,11 @@ pub struct MetricsRow {
     pub global_step: u64,
     /// Episodes finished so far.
     pub episodes: u64,
-    /// Success rate of the episodes finished in this update.
-    pub success_rate: Option<f64>,
-    /// Mean return of the episodes finished in this update.
-    pub episode_return: Option<f64>,
-    /// Mean length of the episodes finished in this update.
-    pub episode_length: Option<f64>,
-    /// Clipped surrogate loss.
-    pub policy_loss: f64,
-    /// Value loss.
-    pub value_loss: f64,
-    /// Policy entropy.
-    pub entropy: f64,
-    /// Approximate KL divergence.
-    pub approx_kl: f64,
-    /// Fraction of clipped ratios.
-    pub clip_fraction: f64,
-    /// Explained variance of the value function.
-    pub explained_variance: Option<f64>,
+    /// The update's success rate, mean return and length of the episodes finished in it,
+    /// and its losses: the columns `success_rate` to `explained_variance`, as the trainer
+    /// measured them.
+    #[serde(flatten)]
+    pub stats: UpdateStats,
     /// Mean curriculum success rate `r_s` over the environments.
     pub curriculum_level: Option<f64>,
     /// Transitions per second of this update.
@@ -68,22 +56,43 @@ fn opt(v: Option<f64>) -> String {
 }
 
 impl MetricsRow {
+    /// The row of update `m`, with `episodes_before` episodes finished before it, the
+    /// curriculum's mean level and `wall_s` training seconds so far.
+    pub fn new(
+        m: &UpdateMetrics,
+        episodes_before: u64,
+        curriculum_level: Option<f64>,
+        wall_s: f64,
+    ) -> Self {
+        MetricsRow {
+            update: m.update,
+            global_step: m.global_step,
+            episodes: episodes_before + m.episodes as u64,
+            stats: m.stats.clone(),
+            curriculum_level,
+            transitions_per_s: m.transitions_per_sec,
+            wall_s,
+            physics_failures: m.physics_failures as u64,
+        }
+    }
+
     /// The row as one CSV line (no newline). Floats use Rust's shortest exact form.
     pub fn to_csv_line(&self) -> String {
+        let s = &self.stats;
         format!(
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.update,
             self.global_step,
             self.episodes,
-            opt(self.success_rate),
-            opt(self.episode_return),
-            opt(self.episode_length),
-            self.policy_loss,
-            self.value_loss,
-            self.entropy,
-            self.approx_kl,
-            self.clip_fraction,
-            opt(self.explained_variance),
+            opt(s.success_rate),
+            opt(s.episode_return),
+            opt(s.episode_length),
+            s.policy_loss,
+            s.value_loss,
+            s.entropy,
+            s.approx_kl,
+            s.clip_fraction,
+            opt(s.explained_variance),
             opt(self.curriculum_level),
             self.transitions_per_s,
             self.wall_s,
@@ -93,21 +102,22 @@ impl MetricsRow {
 
     /// The scalars logged to TensorBoard, as (tag, value); absent values are skipped.
     pub fn scalars(&self) -> Vec<(&'static str, f64)> {
+        let s = &self.stats;
         let mut v = vec![
             ("charts/episodes", self.episodes as f64),
-            ("losses/policy_loss", self.policy_loss),
-            ("losses/value_loss", self.value_loss),
-            ("losses/entropy", self.entropy),
-            ("losses/approx_kl", self.approx_kl),
-            ("losses/clip_fraction", self.clip_fraction),
+            ("losses/policy_loss", s.policy_loss),
+            ("losses/value_loss", s.value_loss),
+            ("losses/entropy", s.entropy),
+            ("losses/approx_kl", s.approx_kl),
+            ("losses/clip_fraction", s.clip_fraction),
             ("charts/transitions_per_s", self.transitions_per_s),
             ("charts/physics_failures", self.physics_failures as f64),
         ];
         let optional = [
-            ("charts/success_rate", self.success_rate),
-            ("charts/episode_return", self.episode_return),
-            ("charts/episode_length", self.episode_length),
-            ("losses/explained_variance", self.explained_variance),
+            ("charts/success_rate", s.success_rate),
+            ("charts/episode_return", s.episode_return),
+            ("charts/episode_length", s.episode_length),
+            ("losses/explained_variance", s.explained_variance),
             ("charts/curriculum_level", self.curriculum_level),
         ];
         v.extend(optional.into_iter().filter_map(|(k, x)| x.map(|x| (k, x))));
@@ -176,15 +186,17 @@ pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<MetricsRow>, TrainError>
             update: int(0, "update")?,
             global_step: int(1, "global_step")?,
             episodes: int(2, "episodes")?,
-            success_rate: maybe(3, "success_rate")?,
-            episode_return: maybe(4, "episode_return")?,
-            episode_length: maybe(5, "episode_length")?,
-            policy_loss: real(6, "policy_loss")?,
-            value_loss: real(7, "value_loss")?,
-            entropy: real(8, "entropy")?,
-            approx_kl: real(9, "approx_kl")?,
-            clip_fraction: real(10, "clip_fraction")?,
-            explained_variance: maybe(11, "explained_variance")?,
+            stats: UpdateStats {
+                success_rate: maybe(3, "success_rate")?,
+                episode_return: maybe(4, "episode_return")?,
+                episode_length: maybe(5, "episode_length")?,
+                policy_loss: real(6, "policy_loss")?,
+                value_loss: real(7, "value_loss")?,
+                entropy: real(8, "entropy")?,
+                approx_kl: real(9, "approx_kl")?,
+                clip_fraction: real(10, "clip_fraction")?,
+                explained_variance: maybe(11, "explained_variance")?,
+            },
             curriculum_level: maybe(12, "curriculum_level")?,
             transitions_per_s: real(13, "transitions_per_s")?,
             wall_s: real(14, "wall_s")?,
@@ -232,11 +244,11 @@ pub fn window_score(rows: &[MetricsRow], window: usize) -> Option<f64> {
             Some(vals.iter().sum::<f64>() / vals.len() as f64)
         }
     };
-    let succ: Vec<f64> = tail.iter().filter_map(|r| r.success_rate).collect();
+    let succ: Vec<f64> = tail.iter().filter_map(|r| r.stats.success_rate).collect();
     if !succ.is_empty() {
         return mean(succ);
     }
-    mean(tail.iter().filter_map(|r| r.episode_return).collect())
+    mean(tail.iter().filter_map(|r| r.stats.episode_return).collect())
 }
 
 #[cfg(test)]
@@ -248,15 +260,17 @@ mod tests {
             update,
             global_step: update * 64,
             episodes: update * 3,
-            success_rate: success,
-            episode_return: ret,
-            episode_length: ret.map(|r| r / 2.0),
-            policy_loss: -0.012,
-            value_loss: 0.5,
-            entropy: 1.4189385,
-            approx_kl: 1e-4,
-            clip_fraction: 0.0625,
-            explained_variance: None,
+            stats: UpdateStats {
+                success_rate: success,
+                episode_return: ret,
+                episode_length: ret.map(|r| r / 2.0),
+                policy_loss: -0.012,
+                value_loss: 0.5,
+                entropy: 1.4189385,
+                approx_kl: 1e-4,
+                clip_fraction: 0.0625,
+                explained_variance: None,
+            },
             curriculum_level: success,
             transitions_per_s: 1234.5,
             wall_s: update as f64 * 0.1,
@@ -273,6 +287,35 @@ mod tests {
         assert!(text.lines().nth(1).unwrap().starts_with("1,64,3,,,,"));
         let back = parse_csv(Path::new("m.csv"), &text).unwrap();
         assert_eq!(back, rows);
+    }
+
+    #[test]
+    fn the_csv_and_json_forms_of_a_row_are_pinned() {
+        // metrics.csv and `grasp train --json`'s `last` as written on 2026-12-07: same
+        // columns, same order, same number formatting.
+        let r = row(2, Some(0.25), Some(13.0 / 3.0));
+        assert_eq!(
+            to_csv(std::slice::from_ref(&r)),
+            "update,global_step,episodes,success_rate,episode_return,episode_length,\
+             policy_loss,value_loss,entropy,approx_kl,clip_fraction,explained_variance,\
+             curriculum_level,transitions_per_s,wall_s,physics_failures\n\
+             2,128,6,0.25,4.333333333333333,2.1666666666666665,-0.012,0.5,1.4189385,0.0001,\
+             0.0625,,0.25,1234.5,0.2,0\n"
+        );
+        assert_eq!(
+            serde_json::to_string(&r).unwrap(),
+            "{\"update\":2,\"global_step\":128,\"episodes\":6,\"success_rate\":0.25,\
+             \"episode_return\":4.333333333333333,\"episode_length\":2.1666666666666665,\
+             \"policy_loss\":-0.012,\"value_loss\":0.5,\"entropy\":1.4189385,\
+             \"approx_kl\":0.0001,\"clip_fraction\":0.0625,\"explained_variance\":null,\
+             \"curriculum_level\":0.25,\"transitions_per_s\":1234.5,\"wall_s\":0.2,\
+             \"physics_failures\":0}"
+        );
+        let pretty = serde_json::to_string_pretty(&r).unwrap();
+        assert!(
+            pretty.starts_with("{\n  \"update\": 2,\n  \"global_step\": 128,"),
+            "{pretty}"
+        );
     }
 
     #[test]

@@ -74,9 +74,9 @@ pub fn learning_curve_svg(title: &str, rows: &[MetricsRow]) -> Result<String, St
             .filter_map(|r| f(r).map(|v| (r.global_step as f64, v)))
             .collect()
     };
-    let success = pts(|r| r.success_rate);
+    let success = pts(|r| r.stats.success_rate);
     let curriculum = pts(|r| r.curriculum_level);
-    let ret = pts(|r| r.episode_return);
+    let ret = pts(|r| r.stats.episode_return);
     let x_max = rows.last().map_or(1.0, |r| r.global_step.max(1) as f64);
     let has_success = !success.is_empty();
     let height = if has_success { 720 } else { 380 };
@@ -236,21 +236,19 @@ pub fn write_band_plot(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ppo::UpdateStats;
 
     fn row(update: u64, success: Option<f64>, ret: f64) -> MetricsRow {
         MetricsRow {
             update,
             global_step: update * 100,
             episodes: update,
-            success_rate: success,
-            episode_return: Some(ret),
-            episode_length: Some(ret),
-            policy_loss: 0.0,
-            value_loss: 0.0,
-            entropy: 0.0,
-            approx_kl: 0.0,
-            clip_fraction: 0.0,
-            explained_variance: None,
+            stats: UpdateStats {
+                success_rate: success,
+                episode_return: Some(ret),
+                episode_length: Some(ret),
+                ..UpdateStats::default()
+            },
             curriculum_level: success,
             transitions_per_s: 1.0,
             wall_s: 1.0,

@@ -544,25 +544,9 @@ impl TrainSession {
     }
 
     fn row_from(&self, m: &UpdateMetrics, wall_s: f64) -> MetricsRow {
-        let episodes = self.rows.last().map_or(0, |r| r.episodes) + m.episodes as u64;
-        MetricsRow {
-            update: m.update,
-            global_step: m.global_step,
-            episodes,
-            success_rate: m.success_rate,
-            episode_return: m.mean_return,
-            episode_length: m.mean_length,
-            policy_loss: m.policy_loss,
-            value_loss: m.value_loss,
-            entropy: m.entropy,
-            approx_kl: m.approx_kl,
-            clip_fraction: m.clip_fraction,
-            explained_variance: m.explained_variance,
-            curriculum_level: self.levels.as_ref().map(|p| p.mean()),
-            transitions_per_s: m.transitions_per_sec,
-            wall_s,
-            physics_failures: m.physics_failures as u64,
-        }
+        let episodes_before = self.rows.last().map_or(0, |r| r.episodes);
+        let level = self.levels.as_ref().map(|p| p.mean());
+        MetricsRow::new(m, episodes_before, level, wall_s)
     }
 
     /// Trains until the planned updates are done or the time budget runs out, calling
@@ -641,8 +625,8 @@ impl TrainSession {
             best_score: self.best,
             stop,
             wall_s: last.as_ref().map_or(self.wall_offset, |r| r.wall_s),
-            last_success_rate: self.rows.iter().rev().find_map(|r| r.success_rate),
-            last_return: self.rows.iter().rev().find_map(|r| r.episode_return),
+            last_success_rate: self.rows.iter().rev().find_map(|r| r.stats.success_rate),
+            last_return: self.rows.iter().rev().find_map(|r| r.stats.episode_return),
             last,
         })
     }
