@@ -46,6 +46,29 @@ pub enum BenchCommand {
         after_help = "Examples:\n  cargo run -- bench regression            # as .ci/run does (dev profile)\n  cargo run -- bench regression --update   # rewrite ci/reference.json after an intended change"
     )]
     Regression(BenchRegressionArgs),
+    /// Cost of one `grasp run` attempt on a simulated robot (build, calibration, cameras,
+    /// plan, attempt, lift) on one thread: the median wall seconds over --rounds trials,
+    /// the backends of --backend alternating round by round (an A/B in one run).
+    #[command(
+        after_help = "Examples:\n  grasp bench run --backend sim --rounds 10 --json\n  grasp bench run --backend sim,mujoco --rounds 10   # needs the mujoco feature"
+    )]
+    Run(BenchRunArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchRunArgs {
+    /// Simulated robots, comma-separated: sim, mujoco.
+    #[arg(long, value_delimiter = ',', default_value = "sim")]
+    pub backend: Vec<super::Backend>,
+    /// The object.
+    #[arg(long, default_value = "box_gelatin")]
+    pub object: String,
+    /// The agent: a checkpoint folder, baseline1 or baseline2 (default: `grasp run`'s).
+    #[arg(long, default_value = grasp::run::DEFAULT_POLICY)]
+    pub policy: String,
+    /// Trials per backend (trial k is the same scene on every backend).
+    #[arg(long, default_value_t = 10)]
+    pub rounds: usize,
 }
 
 #[derive(Debug, Args)]
@@ -131,7 +154,100 @@ pub fn run(a: BenchArgs, g: &Global) -> Result<()> {
         BenchCommand::Sim(a) => sim(a, g),
         BenchCommand::Env(a) => env(a, g),
         BenchCommand::Regression(a) => regression(a, g),
+        BenchCommand::Run(a) => run_attempts(a, g),
     }
+}
+
+/// `grasp bench run`.
+fn run_attempts(a: BenchRunArgs, g: &Global) -> Result<()> {
+    use grasp::run::table::{time_trials, TableAgent, TableConfig, TimedTrial};
+    if !(1..=1000).contains(&a.rounds) {
+        anyhow::bail!("--rounds {} must be in 1..=1000", a.rounds);
+    }
+    let agent = match a.policy.as_str() {
+        "baseline1" => TableAgent::Baseline1,
+        "baseline2" => TableAgent::Baseline2,
+        p => TableAgent::Policy {
+            dir: assets::default_or_given(
+                std::path::Path::new(p),
+                grasp::run::DEFAULT_POLICY,
+                "--policy",
+            )?,
+            label: p.to_string(),
+        },
+    };
+    let robot = Robot::builtin(Side::Left);
+    let object = (a.object.clone(), super::sim_object(&a.object)?);
+    let sim = SimConfig::default();
+    let mut pipeline = grasp::run::pipeline::PipelineConfig::default();
+    grasp::run::session::fit_to_simulator(&mut pipeline, &sim);
+    let cfg = TableConfig {
+        trials: a.rounds,
+        seed: g.seed.unwrap_or(0),
+        threads: 1,
+        sim,
+        pipeline,
+        backend: grasp::run::sim_backend::SimBackendConfig::default(),
+        cameras: grasp::run::sim_backend::CameraConfig::default(),
+        calibration: None,
+    };
+    let mut times: Vec<Vec<TimedTrial>> = vec![Vec::new(); a.backend.len()];
+    for t in 0..a.rounds {
+        for (b, backend) in a.backend.iter().enumerate() {
+            let r = t..t + 1;
+            let one = match backend {
+                super::Backend::Sim => time_trials::<grasp::run::sim_backend::SimHandArm>(
+                    &robot, &object, &agent, &cfg, r,
+                )?,
+                #[cfg(feature = "mujoco")]
+                super::Backend::Mujoco => time_trials::<grasp::run::mujoco_backend::MujocoHandArm>(
+                    &robot, &object, &agent, &cfg, r,
+                )?,
+                #[cfg(not(feature = "mujoco"))]
+                super::Backend::Mujoco => anyhow::bail!(super::NO_MUJOCO),
+                super::Backend::Ros => {
+                    anyhow::bail!("--backend ros: the bench runs simulated robots (sim, mujoco)")
+                }
+            };
+            times[b].extend(one);
+        }
+    }
+    let rows: Vec<serde_json::Value> = a
+        .backend
+        .iter()
+        .zip(&times)
+        .map(|(b, t)| {
+            let s: Vec<f64> = t.iter().map(|x| x.seconds).collect();
+            serde_json::json!({
+                "backend": b.name(),
+                "seconds": s,
+                "median_s": med(&s, |x| *x),
+                "successes": t.iter().filter(|x| x.success).count(),
+            })
+        })
+        .collect();
+    if g.json {
+        let out = serde_json::json!({
+            "object": a.object,
+            "agent": agent.label(),
+            "rounds": a.rounds,
+            "threads": 1,
+            "backends": rows,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        for r in &rows {
+            println!(
+                "{}: median {:.3} s per attempt on one thread ({} rounds on {}, {} held)",
+                r["backend"].as_str().unwrap_or_default(),
+                r["median_s"].as_f64().unwrap_or(f64::NAN),
+                a.rounds,
+                a.object,
+                r["successes"]
+            );
+        }
+    }
+    Ok(())
 }
 
 fn regression(a: BenchRegressionArgs, g: &Global) -> Result<()> {

@@ -245,18 +245,7 @@ pub fn run_table<A: SimulatedArm>(
                 };
                 let mut out = Vec::with_capacity(cfg.trials);
                 for t in 0..cfg.trials {
-                    let mut controller = match (&agents[a], runner.as_mut()) {
-                        (TableAgent::Baseline1, _) => Controller::Baseline {
-                            stop_on_touch: false,
-                        },
-                        (TableAgent::Baseline2, _) => Controller::Baseline {
-                            stop_on_touch: true,
-                        },
-                        (TableAgent::Policy { .. }, Some(p)) => Controller::Policy(p),
-                        (TableAgent::Policy { .. }, None) => {
-                            unreachable!("a policy agent's runner is loaded above")
-                        }
-                    };
+                    let mut controller = controller(&agents[a], runner.as_mut());
                     let mut file = AttemptLog::open(&log_path(a, o, t))?;
                     out.push(run_trial::<A>(
                         robot,
@@ -331,6 +320,74 @@ pub fn run_table<A: SimulatedArm>(
 
 /// Trial `trial` of `object` with `controller`: a session on the trial's scene, judged by
 /// the backend; errors become a failed trial.
+/// The controller of `agent`: a scripted baseline, or the policy `runner` (loaded for a
+/// policy agent).
+fn controller<'a>(agent: &TableAgent, runner: Option<&'a mut PolicyRunner>) -> Controller<'a> {
+    match (agent, runner) {
+        (TableAgent::Baseline1, _) => Controller::Baseline {
+            stop_on_touch: false,
+        },
+        (TableAgent::Baseline2, _) => Controller::Baseline {
+            stop_on_touch: true,
+        },
+        (TableAgent::Policy { .. }, Some(p)) => Controller::Policy(p),
+        (TableAgent::Policy { .. }, None) => {
+            unreachable!("a policy agent's runner is loaded before its trials")
+        }
+    }
+}
+
+/// One trial's wall time and outcome ([`time_trials`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TimedTrial {
+    /// Wall-clock seconds of the whole trial: building the backend, calibrating, the
+    /// cameras, the plan, the attempt and the lift.
+    pub seconds: f64,
+    /// Whether the object was held.
+    pub success: bool,
+}
+
+/// Runs the trials `trials` of `agent` on `object` one after another on the calling thread
+/// (as [`run_table`] runs each; logs into a temporary folder) and times each: what one
+/// attempt of `grasp run` costs on one core (`grasp bench run`).
+pub fn time_trials<A: SimulatedArm>(
+    robot: &Robot,
+    object: &(String, ObjectSpec),
+    agent: &TableAgent,
+    cfg: &TableConfig,
+    trials: std::ops::Range<usize>,
+) -> Result<Vec<TimedTrial>, TableError> {
+    let mut runner = match agent {
+        TableAgent::Policy { dir, .. } => {
+            Some(
+                PolicyRunner::load(dir).map_err(|source| TableError::Policy {
+                    path: dir.clone(),
+                    source,
+                })?,
+            )
+        }
+        _ => None,
+    };
+    let logs = tempfile::tempdir().map_err(|e| {
+        TableError::Log(LogError::Io {
+            path: std::env::temp_dir(),
+            source: e,
+        })
+    })?;
+    let mut out = Vec::with_capacity(trials.len());
+    for t in trials {
+        let mut controller = controller(agent, runner.as_mut());
+        let mut log = AttemptLog::open(&logs.path().join(format!("{t}.jsonl")))?;
+        let start = std::time::Instant::now();
+        let r = run_trial::<A>(robot, object, t, cfg, &mut controller, &mut log);
+        out.push(TimedTrial {
+            seconds: start.elapsed().as_secs_f64(),
+            success: r.summary.success,
+        });
+    }
+    Ok(out)
+}
+
 fn run_trial<A: SimulatedArm>(
     robot: &Robot,
     (name, object): &(String, ObjectSpec),
