@@ -129,6 +129,9 @@ pub struct RunArgs {
     /// Simulator config (TOML); built-in defaults when absent.
     #[arg(long)]
     pub sim_config: Option<PathBuf>,
+    /// MuJoCo engine settings (TOML, mujoco backend); configs/mujoco.toml's when absent.
+    #[arg(long)]
+    pub mujoco_settings: Option<PathBuf>,
     /// Write the point cloud the grasp was planned on (sim cameras or --cloud) as PCD.
     #[arg(long)]
     pub save_cloud: Option<PathBuf>,
@@ -248,6 +251,14 @@ fn check_overlaps(a: &RunArgs, policies: &[PathBuf], log: Option<&Path>) -> Resu
 
 pub fn run(a: RunArgs, g: &Global) -> Result<()> {
     super::check_attempts(a.attempts, "grasp attempts on the object")?;
+    if let Some(p) = &a.mujoco_settings {
+        if a.backend != Backend::Mujoco {
+            bail!("--mujoco-settings is for --backend mujoco");
+        }
+        grasp::run::mjcf::MujocoSettings::load(p)
+            .and_then(|s| s.use_for_process())
+            .with_context(|| format!("--mujoco-settings {}", p.display()))?;
+    }
     if a.objects.is_some() {
         return match a.backend {
             Backend::Sim => table::<SimHandArm>(&a, g),

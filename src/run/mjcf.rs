@@ -67,6 +67,9 @@ pub enum MjcfError {
     Model(String),
 }
 
+/// The settings chosen for this process ([`MujocoSettings::use_for_process`]).
+static IN_USE: std::sync::OnceLock<MujocoSettings> = std::sync::OnceLock::new();
+
 /// MuJoCo's engine settings (see `configs/mujoco.toml` for each value's reason).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -95,6 +98,15 @@ pub struct MujocoSettings {
     pub solimp: [f64; 5],
     /// Contact margin (m).
     pub margin: f64,
+    /// The joint limits' solref (time constant s, damping ratio); MuJoCo's default is the
+    /// contacts' (0.02, 1).
+    #[serde(default = "default_solref")]
+    pub joint_limit_solref: [f64; 2],
+}
+
+/// MuJoCo's default solref, (0.02 s, 1).
+fn default_solref() -> [f64; 2] {
+    [0.02, 1.0]
 }
 
 impl MujocoSettings {
@@ -104,6 +116,25 @@ impl MujocoSettings {
             crate::util::config::parse_toml(Path::new("configs/mujoco.toml"), DEFAULT_MUJOCO_TOML)
                 .unwrap_or_else(|e| unreachable!("the embedded configs/mujoco.toml parses: {e}"));
         s
+    }
+
+    /// The settings the MuJoCo backend builds its scenes with: those given to
+    /// [`MujocoSettings::use_for_process`], else the built-in ones.
+    pub fn in_use() -> MujocoSettings {
+        IN_USE
+            .get()
+            .cloned()
+            .unwrap_or_else(MujocoSettings::builtin)
+    }
+
+    /// Makes `self` the settings of every MuJoCo scene this process builds (`grasp run
+    /// --mujoco-settings`); an error once another set was chosen.
+    pub fn use_for_process(self) -> Result<(), MjcfError> {
+        self.validate()?;
+        IN_USE.set(self).map_err(|_| MjcfError::Setting {
+            field: "settings",
+            detail: "the MuJoCo settings of this process were already chosen".into(),
+        })
     }
 
     /// Loads and checks a settings file.
@@ -315,7 +346,11 @@ pub fn scene_xml(
         nums(&s.solimp),
         num(s.margin)
     );
-    let _ = writeln!(x, "  <default><geom {contact}/></default>");
+    let _ = writeln!(
+        x,
+        "  <default><geom {contact}/><joint solreflimit=\"{}\"/></default>",
+        nums(&s.joint_limit_solref)
+    );
     let mut world = String::new();
     // The table: its top at z = 0, as in Rapier.
     let _ = writeln!(
@@ -567,6 +602,21 @@ fn object_body(
             let hulls = all.len().saturating_sub(*support_feet);
             for (k, (pose, shape)) in all[..hulls].iter().enumerate() {
                 let name = object_geom_name(k);
+                // parry's cylinders stand along y, MuJoCo's along z.
+                let along_y = matches!(
+                    shape.as_typed_shape(),
+                    rapier3d::parry::shape::TypedShape::Cylinder(_)
+                );
+                let pose = if along_y {
+                    *pose
+                        * rapier3d::prelude::Pose::rotation(rapier3d::math::Vector::new(
+                            -std::f32::consts::FRAC_PI_2,
+                            0.0,
+                            0.0,
+                        ))
+                } else {
+                    *pose
+                };
                 let t = pose.translation;
                 let r = pose.rotation;
                 let attrs = format!(
@@ -654,6 +704,10 @@ fn part_geom(
             format!("type=\"box\" size=\"{}\"", nums(&[h.x as f64, h.y as f64, h.z as f64]))
         }
         TypedShape::Ball(b) => format!("type=\"sphere\" size=\"{}\"", num(b.radius as f64)),
+        TypedShape::Cylinder(c) => format!(
+            "type=\"cylinder\" size=\"{}\"",
+            nums(&[c.radius as f64, c.half_height as f64])
+        ),
         TypedShape::Capsule(c) => {
             let (a, b) = (c.segment.a, c.segment.b);
             format!(
@@ -664,7 +718,7 @@ fn part_geom(
         }
         _ => {
             return Err(MjcfError::Model(format!(
-                "object '{}': part {k} has a shape MuJoCo is not given (convex polyhedra, boxes, balls and capsules are)",
+                "object '{}': part {k} has a shape MuJoCo is not given (convex polyhedra, boxes, balls, capsules and cylinders are)",
                 o.name
             )))
         }

