@@ -392,14 +392,7 @@ pub fn scene_xml(
     let mut act = String::new();
     for &ji in &robot.hand.joints {
         let j = &robot.joints[ji];
-        let name = crate::robot::joints::canonical_name(&j.name);
-        let g = if name.starts_with("WR") {
-            sim.motors.wrist
-        } else if name.starts_with("TH") {
-            sim.motors.thumb
-        } else {
-            sim.motors.fingers
-        };
+        let g = sim.motors.for_joint(&j.name);
         let _ = writeln!(
             act,
             "    <position name=\"{}\" joint=\"{}\" kp=\"{}\" kv=\"{}\" forcerange=\"{}\"/>",

@@ -275,27 +275,6 @@ impl MujocoHandArm {
         self.raw.reading(t, &q, &tip, &effort)
     }
 
-    /// One reading while fingertip `finger` (0..5) is pressed with `force_n` newtons (a
-    /// known force added to its contact force in the raw model), as the Rapier backend.
-    pub fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
-        if finger >= N_TACTILE {
-            return Err(cmd_err(
-                "finger",
-                format!("{finger} is not a fingertip index 0..5"),
-            ));
-        }
-        if !(force_n.is_finite() && force_n >= 0.0) {
-            return Err(cmd_err(
-                "press force",
-                format!("{force_n} N must be finite and >= 0"),
-            ));
-        }
-        self.extra_force[finger] = force_n;
-        let r = self.read();
-        self.extra_force = [0.0; N_TACTILE];
-        r
-    }
-
     /// Targets clamped to the joint limits, coupled J1 = J2 = J0 / 2 (as Rapier's).
     fn clamp_targets(&self, t: &[f64; N_HAND_JOINTS]) -> [f64; N_HAND_JOINTS] {
         let mut out = *t;
@@ -530,58 +509,6 @@ impl MujocoHandArm {
             failure: None,
         })
     }
-
-    /// Prepares a second attempt after a failed one, as the Rapier backend does: opens the
-    /// hand where it is and runs the physics (at least 0.25 s, at most 2 s) until the
-    /// object is at rest clear of the hand and on the table; from then on, arm moves keep
-    /// the object where it lies.
-    pub fn settle_for_retry(&mut self) -> Result<(), HwError> {
-        use crate::sim::settle::{ON_TABLE_M, REST_SPEED, REST_SPIN, SETTLE_MAX_S, SETTLE_MIN_S};
-        let dt = self.dt;
-        let (min, max) = (
-            (SETTLE_MIN_S / dt).round() as usize,
-            (SETTLE_MAX_S / dt).round() as usize,
-        );
-        self.targets = self.clamp_targets(&Posture::Open.angles());
-        self.apply_controls();
-        let mut settled = false;
-        for k in 0..max {
-            if !self.step() {
-                return Err(self.physics_err());
-            }
-            if k + 1 >= min {
-                let v = self.data.qvel();
-                let d = self.ids.obj_dof;
-                let lin = Vector3::new(v[d], v[d + 1], v[d + 2]).norm();
-                let ang = Vector3::new(v[d + 3], v[d + 4], v[d + 5]).norm();
-                if lin < REST_SPEED && ang < REST_SPIN && self.contact_forces().1 == 0.0 {
-                    settled = true;
-                    break;
-                }
-            }
-        }
-        if !settled {
-            return Err(cmd_err(
-                "retry",
-                "the object did not come to rest clear of the hand within 2 s".into(),
-            ));
-        }
-        if self.object_aabb().0.z.abs() > ON_TABLE_M {
-            return Err(cmd_err("retry", "the object left the table".into()));
-        }
-        self.kept_object = Some(self.object_pose());
-        Ok(())
-    }
-
-    /// The point cloud the simulated depth cameras see of the object where it lies now
-    /// (the Rapier backend's cameras, on MuJoCo's object pose).
-    pub fn camera_cloud(
-        &self,
-        cam: &CameraConfig,
-        seed: u64,
-    ) -> Result<Vec<Point3<f64>>, CloudError> {
-        camera_cloud_at(&self.object, &pose_f32(&self.object_pose()), cam, seed)
-    }
 }
 
 fn pose_f32(p: &Isometry3<f64>) -> rapier3d::math::Pose {
@@ -673,16 +600,73 @@ impl SimulatedArm for MujocoHandArm {
         MujocoHandArm::new(robot, object, sim_cfg, cfg, &MujocoSettings::in_use())
     }
 
+    /// The point cloud the simulated depth cameras see of the object where it lies now
+    /// (the Rapier backend's cameras, on MuJoCo's object pose).
     fn camera_cloud(&self, cam: &CameraConfig, seed: u64) -> Result<Vec<Point3<f64>>, CloudError> {
-        MujocoHandArm::camera_cloud(self, cam, seed)
+        camera_cloud_at(&self.object, &pose_f32(&self.object_pose()), cam, seed)
     }
 
+    /// One reading while fingertip `finger` (0..5) is pressed with `force_n` newtons (a
+    /// known force added to its contact force in the raw model), as the Rapier backend.
     fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
-        MujocoHandArm::read_pressed(self, finger, force_n)
+        if finger >= N_TACTILE {
+            return Err(cmd_err(
+                "finger",
+                format!("{finger} is not a fingertip index 0..5"),
+            ));
+        }
+        if !(force_n.is_finite() && force_n >= 0.0) {
+            return Err(cmd_err(
+                "press force",
+                format!("{force_n} N must be finite and >= 0"),
+            ));
+        }
+        self.extra_force[finger] = force_n;
+        let r = self.read();
+        self.extra_force = [0.0; N_TACTILE];
+        r
     }
 
+    /// Prepares a second attempt after a failed one, as the Rapier backend does: opens the
+    /// hand where it is and runs the physics (at least 0.25 s, at most 2 s) until the
+    /// object is at rest clear of the hand and on the table; from then on, arm moves keep
+    /// the object where it lies.
     fn settle_for_retry(&mut self) -> Result<(), HwError> {
-        MujocoHandArm::settle_for_retry(self)
+        use crate::sim::settle::{ON_TABLE_M, REST_SPEED, REST_SPIN, SETTLE_MAX_S, SETTLE_MIN_S};
+        let dt = self.dt;
+        let (min, max) = (
+            (SETTLE_MIN_S / dt).round() as usize,
+            (SETTLE_MAX_S / dt).round() as usize,
+        );
+        self.targets = self.clamp_targets(&Posture::Open.angles());
+        self.apply_controls();
+        let mut settled = false;
+        for k in 0..max {
+            if !self.step() {
+                return Err(self.physics_err());
+            }
+            if k + 1 >= min {
+                let v = self.data.qvel();
+                let d = self.ids.obj_dof;
+                let lin = Vector3::new(v[d], v[d + 1], v[d + 2]).norm();
+                let ang = Vector3::new(v[d + 3], v[d + 4], v[d + 5]).norm();
+                if lin < REST_SPEED && ang < REST_SPIN && self.contact_forces().1 == 0.0 {
+                    settled = true;
+                    break;
+                }
+            }
+        }
+        if !settled {
+            return Err(cmd_err(
+                "retry",
+                "the object did not come to rest clear of the hand within 2 s".into(),
+            ));
+        }
+        if self.object_aabb().0.z.abs() > ON_TABLE_M {
+            return Err(cmd_err("retry", "the object left the table".into()));
+        }
+        self.kept_object = Some(self.object_pose());
+        Ok(())
     }
 
     fn physics_failure(&self) -> Option<String> {
@@ -882,44 +866,37 @@ mod tests {
         assert_eq!(a.lift_outcome(), Some(l.success));
     }
 
-    #[test]
-    fn a_library_mesh_object_rests_where_rapier_puts_it() {
+    /// The library object `name` rests 1 s on the table: it neither sinks nor jumps (1 mm)
+    /// nor tips, and the physics holds.
+    fn rests_in_place(name: &str) {
         use crate::objects::sets::{build, resolve_specs};
         use crate::objects::BuildContext;
         let dir = tempfile::tempdir().unwrap();
-        let spec = resolve_specs("mug").unwrap().remove(0);
+        let spec = resolve_specs(name).unwrap().remove(0);
         let o = build(&spec, &BuildContext::with_cache_dir(dir.path())).unwrap();
         let mut a = arm(ObjectSpec::from_object(&o).unwrap());
         let (lo0, hi0) = a.object_aabb();
-        assert!(lo0.z.abs() < 1e-6, "{lo0}");
+        assert!(lo0.z.abs() < 1e-6, "{name}: {lo0}");
         a.wait(1.0).unwrap();
         let (lo, hi) = a.object_aabb();
-        // The mug stands on its mesh parts: it neither sinks nor jumps (1 mm), nor tips.
         assert!(
             (lo.z - lo0.z).abs() < 1e-3 && (hi.z - hi0.z).abs() < 1e-3,
-            "{lo} {hi}"
+            "{name}: {lo} {hi}"
         );
-        assert!(a.failure().is_none());
+        assert!(a.failure().is_none(), "{name}");
+    }
+
+    #[test]
+    fn a_library_mesh_object_rests_where_rapier_puts_it() {
+        // The mug: convex mesh parts, placed where Rapier puts them.
+        rests_in_place("mug");
     }
 
     #[test]
     fn objects_with_cylinder_parts_build_and_rest() {
-        // proc-1000-15 (validation): one convex part that is a cylinder, which parry
-        // stands along y and MuJoCo along z.
-        use crate::objects::sets::{build, resolve_specs};
-        use crate::objects::BuildContext;
-        let dir = tempfile::tempdir().unwrap();
-        let spec = resolve_specs("proc-1000-15").unwrap().remove(0);
-        let o = build(&spec, &BuildContext::with_cache_dir(dir.path())).unwrap();
-        let mut a = arm(ObjectSpec::from_object(&o).unwrap());
-        let (lo0, hi0) = a.object_aabb();
-        a.wait(1.0).unwrap();
-        let (lo, hi) = a.object_aabb();
-        assert!(
-            (lo.z - lo0.z).abs() < 1e-3 && (hi.z - hi0.z).abs() < 1e-3,
-            "{lo} {hi}"
-        );
-        assert!(a.failure().is_none());
+        // proc-1000-15 (validation): a convex part that is a cylinder, which parry stands
+        // along y and MuJoCo along z.
+        rests_in_place("proc-1000-15");
     }
 
     #[test]
@@ -937,5 +914,21 @@ mod tests {
                 q[k]
             );
         }
+    }
+
+    #[test]
+    fn the_same_seed_gives_the_same_readings() {
+        let run = || {
+            let mut a = arm(ObjectSpec::default_box());
+            let mut t = a.targets;
+            t[crate::sim::hand_index("FFJ3")] = 1.2;
+            a.command_hand(&t).unwrap();
+            a.wait(0.4).unwrap();
+            (a.read().unwrap(), a.object_pose())
+        };
+        let (r1, p1) = run();
+        let (r2, p2) = run();
+        assert_eq!(r1, r2);
+        assert_eq!(p1, p2);
     }
 }

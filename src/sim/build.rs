@@ -292,14 +292,7 @@ pub(super) fn revolute_joints(
         let a = x_to(&j.axis);
         let f1 = poff * j.origin * Isometry3::from_parts(Default::default(), a);
         let f2 = Isometry3::from_parts(Default::default(), a);
-        let name = crate::robot::joints::canonical_name(&j.name);
-        let gains = if name.starts_with("WR") {
-            cfg.motors.wrist
-        } else if name.starts_with("TH") {
-            cfg.motors.thumb
-        } else {
-            cfg.motors.fingers
-        };
+        let gains = cfg.motors.for_joint(&j.name);
         let mut b = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
             .local_frame1(pose_f32(&f1))
             .local_frame2(pose_f32(&f2));

@@ -66,6 +66,21 @@ pub struct MotorGains {
     pub lift_max_force: f64,
 }
 
+impl MotorGains {
+    /// The gains of the hand joint named `name` (any side prefix): the wrist's for WR
+    /// joints, the thumb's for TH joints, the fingers' otherwise.
+    pub fn for_joint(&self, name: &str) -> Gains {
+        let name = crate::robot::joints::canonical_name(name);
+        if name.starts_with("WR") {
+            self.wrist
+        } else if name.starts_with("TH") {
+            self.thumb
+        } else {
+            self.fingers
+        }
+    }
+}
+
 /// Contact friction coefficients (combined with the MIN rule).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
