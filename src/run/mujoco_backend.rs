@@ -90,6 +90,9 @@ pub struct MujocoHandArm {
     extra_force: [f64; N_TACTILE],
     lift: Option<LiftOutcome>,
     failure: Option<String>,
+    /// The deepest object contact since the hand was last placed (m) and what the object
+    /// touched there.
+    deepest: Option<(f64, String)>,
     object_start: Vector3<f64>,
     kept_object: Option<Isometry3<f64>>,
     guard_raise: f64,
@@ -156,6 +159,7 @@ impl MujocoHandArm {
             extra_force: [0.0; N_TACTILE],
             lift: None,
             failure: None,
+            deepest: None,
             object_start: Vector3::zeros(),
             kept_object: None,
             guard_raise: 0.0,
@@ -345,6 +349,7 @@ impl MujocoHandArm {
     fn reset_world(&mut self, root: &Isometry3<f64>, start: &[f64; N_HAND_JOINTS]) {
         self.data.reset();
         self.failure = None;
+        self.deepest = None;
         self.mount = *root;
         let t = root.translation.vector;
         let r = root.rotation.quaternion();
@@ -416,8 +421,47 @@ impl MujocoHandArm {
             return false;
         }
         self.data.step();
+        if let Some((d, with)) = self.deepest_now() {
+            if self.deepest.as_ref().is_none_or(|(best, _)| d > *best) {
+                self.deepest = Some((d, with));
+            }
+        }
         self.failure = self.check_failure();
         self.failure.is_none()
+    }
+
+    /// The deepest penetration of the object now (m) and what it touches there: a hand
+    /// link's name or `table`; `None` without a penetrating contact.
+    fn deepest_now(&self) -> Option<(f64, String)> {
+        let m = self.data.model();
+        let mut best: Option<(f64, usize)> = None;
+        for c in self.data.contact() {
+            let (g1, g2) = (c.geom[0], c.geom[1]);
+            if g1 < 0 || g2 < 0 || c.dist >= 0.0 {
+                continue;
+            }
+            let other = if self.ids.object[g1 as usize] {
+                g2 as usize
+            } else if self.ids.object[g2 as usize] {
+                g1 as usize
+            } else {
+                continue;
+            };
+            if best.is_none_or(|(d, _)| -c.dist > d) {
+                best = Some((-c.dist, other));
+            }
+        }
+        best.map(|(d, g)| {
+            let with = if self.ids.hand[g] {
+                let body = m.geom_bodyid()[g] as usize;
+                m.id_to_name(MjtObjBase::mjOBJ_BODY, body)
+                    .unwrap_or("hand")
+                    .to_string()
+            } else {
+                "table".to_string()
+            };
+            (d, with)
+        })
     }
 
     fn check_failure(&self) -> Option<String> {
@@ -448,21 +492,13 @@ impl MujocoHandArm {
         if travel > f.max_object_travel {
             return Some(format!("the object travelled {travel:.3} m"));
         }
-        let deepest = self
-            .data
-            .contact()
-            .iter()
-            .filter(|c| {
-                let (g1, g2) = (c.geom[0], c.geom[1]);
-                g1 >= 0 && g2 >= 0 && (self.ids.object[g1 as usize] || self.ids.object[g2 as usize])
-            })
-            .map(|c| -c.dist)
-            .fold(0.0, f64::max);
-        if deepest > f.max_penetration {
-            return Some(format!(
-                "an object contact is {:.1} mm deep",
-                deepest * 1000.0
-            ));
+        if let Some((depth, _)) = self.deepest_now() {
+            if depth > f.max_penetration {
+                return Some(format!(
+                    "an object contact is {:.1} mm deep",
+                    depth * 1000.0
+                ));
+            }
         }
         None
     }
@@ -675,6 +711,10 @@ impl SimulatedArm for MujocoHandArm {
 
     fn lift_report(&self) -> Option<LiftOutcome> {
         self.lift.clone()
+    }
+
+    fn deepest_contact(&self) -> Option<(f64, String)> {
+        self.deepest.clone()
     }
 }
 
