@@ -117,17 +117,8 @@ impl MujocoHandArm {
         cfg: SimBackendConfig,
         settings: &MujocoSettings,
     ) -> Result<MujocoHandArm, HwError> {
+        cfg.validate()?;
         let raw = RawModel::new(cfg.raw.clone())?;
-        let finite = cfg.object_xy.iter().all(|v| v.is_finite())
-            && cfg.object_yaw.is_finite()
-            && cfg.home_clearance.is_finite()
-            && cfg.home_clearance >= 0.0;
-        if !finite {
-            return Err(cmd_err(
-                "object_xy/object_yaw/home_clearance",
-                "must be finite (clearance >= 0)".into(),
-            ));
-        }
         sim_cfg
             .validate()
             .map_err(|e| cmd_err("sim config", e.to_string()))?;
@@ -645,18 +636,7 @@ impl SimulatedArm for MujocoHandArm {
     /// One reading while fingertip `finger` (0..5) is pressed with `force_n` newtons (a
     /// known force added to its contact force in the raw model), as the Rapier backend.
     fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
-        if finger >= N_TACTILE {
-            return Err(cmd_err(
-                "finger",
-                format!("{finger} is not a fingertip index 0..5"),
-            ));
-        }
-        if !(force_n.is_finite() && force_n >= 0.0) {
-            return Err(cmd_err(
-                "press force",
-                format!("{force_n} N must be finite and >= 0"),
-            ));
-        }
+        super::raw_model::check_press(finger, force_n)?;
         self.extra_force[finger] = force_n;
         let r = self.read();
         self.extra_force = [0.0; N_TACTILE];

@@ -169,6 +169,24 @@ impl RawModel {
     }
 }
 
+/// Checks a calibration press: `finger` a fingertip index (0..5: FF, MF, RF, LF, TH) and
+/// `force_n` a finite, non-negative force (N); the error names the field.
+pub fn check_press(finger: usize, force_n: f64) -> Result<(), HwError> {
+    if finger >= N_TACTILE {
+        return Err(HwError::InvalidCommand {
+            field: "finger".into(),
+            detail: format!("{finger} is not a fingertip index 0..5"),
+        });
+    }
+    if !(force_n.is_finite() && force_n >= 0.0) {
+        return Err(HwError::InvalidCommand {
+            field: "press force".into(),
+            detail: format!("{force_n} N must be finite and >= 0"),
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

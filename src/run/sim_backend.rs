@@ -77,6 +77,25 @@ pub struct SimBackendConfig {
     pub home_clearance: f64,
 }
 
+impl SimBackendConfig {
+    /// Checks the raw-sensor model and that the object's place and the clearance are
+    /// finite (the clearance non-negative); the error names the field.
+    pub fn validate(&self) -> Result<(), HwError> {
+        self.raw.validate()?;
+        let finite = self.object_xy.iter().all(|v| v.is_finite())
+            && self.object_yaw.is_finite()
+            && self.home_clearance.is_finite()
+            && self.home_clearance >= 0.0;
+        if !finite {
+            return Err(HwError::InvalidCommand {
+                field: "object_xy/object_yaw/home_clearance".into(),
+                detail: "must be finite (clearance >= 0)".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for SimBackendConfig {
     fn default() -> Self {
         SimBackendConfig {
@@ -125,17 +144,8 @@ impl SimHandArm {
         sim_cfg: SimConfig,
         cfg: SimBackendConfig,
     ) -> Result<SimHandArm, HwError> {
+        cfg.validate()?;
         let raw = RawModel::new(cfg.raw.clone())?;
-        let finite = cfg.object_xy.iter().all(|v| v.is_finite())
-            && cfg.object_yaw.is_finite()
-            && cfg.home_clearance.is_finite()
-            && cfg.home_clearance >= 0.0;
-        if !finite {
-            return Err(HwError::InvalidCommand {
-                field: "object_xy/object_yaw/home_clearance".into(),
-                detail: "must be finite (clearance >= 0)".into(),
-            });
-        }
         let top = 2.0 * object.rest_height();
         let sim = HandSim::new(robot, object, sim_cfg).map_err(sim_err)?;
         let clock = cfg.raw.clock_start_s;
@@ -233,18 +243,7 @@ impl SimHandArm {
     /// One reading while fingertip `finger` (0..5: FF, MF, RF, LF, TH) is pressed with
     /// `force_n` newtons (a known force added to its contact force in the raw model).
     pub fn read_pressed(&mut self, finger: usize, force_n: f64) -> Result<RawSensors, HwError> {
-        if finger >= N_TACTILE {
-            return Err(HwError::InvalidCommand {
-                field: "finger".into(),
-                detail: format!("{finger} is not a fingertip index 0..5"),
-            });
-        }
-        if !(force_n.is_finite() && force_n >= 0.0) {
-            return Err(HwError::InvalidCommand {
-                field: "press force".into(),
-                detail: format!("{force_n} N must be finite and >= 0"),
-            });
-        }
+        super::raw_model::check_press(finger, force_n)?;
         self.extra_force[finger] = force_n;
         let r = self.read();
         self.extra_force = [0.0; N_TACTILE];
