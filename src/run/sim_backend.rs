@@ -41,7 +41,6 @@
 //!   configured height, ramp and hold); a lift of another height is refused. The judgement
 //!   (object held) is reported by [`HandArm::lift_outcome`].
 
-use super::pipeline::ArmBase;
 use crate::hardware::pointcloud::CloudError;
 use crate::hardware::{
     check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
@@ -61,53 +60,7 @@ pub const GUARD_STEP_M: f64 = 0.005;
 /// Largest raise of the guarded placement (m).
 pub const GUARD_MAX_M: f64 = 0.10;
 
-/// Where the object lies and where the arm stands in the simulated world.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SimBackendConfig {
-    /// The raw-sensor model.
-    pub raw: RawModelConfig,
-    /// Object centre x, y on the table (m).
-    pub object_xy: [f64; 2],
-    /// Object yaw (rad).
-    pub object_yaw: f64,
-    /// The UR10e base in the world.
-    pub arm_base: ArmBase,
-    /// Height of the hand's grasp point above the object's top at construction (m).
-    pub home_clearance: f64,
-}
-
-impl SimBackendConfig {
-    /// Checks the raw-sensor model and that the object's place and the clearance are
-    /// finite (the clearance non-negative); the error names the field.
-    pub fn validate(&self) -> Result<(), HwError> {
-        self.raw.validate()?;
-        let finite = self.object_xy.iter().all(|v| v.is_finite())
-            && self.object_yaw.is_finite()
-            && self.home_clearance.is_finite()
-            && self.home_clearance >= 0.0;
-        if !finite {
-            return Err(HwError::InvalidCommand {
-                field: "object_xy/object_yaw/home_clearance".into(),
-                detail: "must be finite (clearance >= 0)".into(),
-            });
-        }
-        Ok(())
-    }
-}
-
-impl Default for SimBackendConfig {
-    fn default() -> Self {
-        SimBackendConfig {
-            raw: RawModelConfig::default(),
-            object_xy: [0.0, 0.0],
-            object_yaw: 0.0,
-            arm_base: ArmBase::default(),
-            home_clearance: 0.15,
-        }
-    }
-}
-
+pub use super::simulated::SimBackendConfig;
 pub use crate::perception::camera::{camera_cloud, CameraConfig};
 
 /// The simulated hand-arm system (see the module docs).

@@ -10,7 +10,9 @@ use crate::robot::Robot;
 use crate::sim::{FailureReport, LiftOutcome, ObjectSpec, SimConfig};
 use nalgebra::Point3;
 
-use super::sim_backend::{CameraConfig, SimBackendConfig};
+use super::pipeline::ArmBase;
+use super::raw_model::RawModelConfig;
+use crate::perception::camera::CameraConfig;
 
 /// A hand-arm whose world is simulated: built around one object, it can show the object to simulated depth cameras, press a fingertip with a known force (calibration), let the object settle for a retry, and judge a lift (HandArm::lift_outcome).
 pub trait SimulatedArm: crate::hardware::HandArm + Sized {
@@ -58,5 +60,52 @@ pub trait SimulatedArm: crate::hardware::HandArm + Sized {
     /// last placed (m) and what the object touched there, where the engine measures it.
     fn deepest_contact(&self) -> Option<(f64, String)> {
         None
+    }
+}
+
+/// Where the object lies and where the arm stands in the simulated world.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimBackendConfig {
+    /// The raw-sensor model.
+    pub raw: RawModelConfig,
+    /// Object centre x, y on the table (m).
+    pub object_xy: [f64; 2],
+    /// Object yaw (rad).
+    pub object_yaw: f64,
+    /// The UR10e base in the world.
+    pub arm_base: ArmBase,
+    /// Height of the hand's grasp point above the object's top at construction (m).
+    pub home_clearance: f64,
+}
+
+impl SimBackendConfig {
+    /// Checks the raw-sensor model and that the object's place and the clearance are
+    /// finite (the clearance non-negative); the error names the field.
+    pub fn validate(&self) -> Result<(), HwError> {
+        self.raw.validate()?;
+        let finite = self.object_xy.iter().all(|v| v.is_finite())
+            && self.object_yaw.is_finite()
+            && self.home_clearance.is_finite()
+            && self.home_clearance >= 0.0;
+        if !finite {
+            return Err(HwError::InvalidCommand {
+                field: "object_xy/object_yaw/home_clearance".into(),
+                detail: "must be finite (clearance >= 0)".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Default for SimBackendConfig {
+    fn default() -> Self {
+        SimBackendConfig {
+            raw: RawModelConfig::default(),
+            object_xy: [0.0, 0.0],
+            object_yaw: 0.0,
+            arm_base: ArmBase::default(),
+            home_clearance: 0.15,
+        }
     }
 }
