@@ -386,6 +386,11 @@ fn shipped_configs_load() {
         if name.starts_with("sim") || !name.ends_with(".toml") {
             continue;
         }
+        // The MuJoCo engine's settings load as such.
+        if name == "mujoco.toml" {
+            grasp::run::mjcf::MujocoSettings::load(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+            continue;
+        }
         let c = TrainConfig::load(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
         if p.parent() == Some(dir.join("levers").as_path()) {
             // ship.toml's one-change levers are named ship_<file>.
