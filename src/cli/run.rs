@@ -336,7 +336,7 @@ pub fn run(a: RunArgs, g: &Global) -> Result<()> {
             {
                 let mut arm = safe_arm(super::connect_ros(&a.ros_url)?, &robot, &cfg)?;
                 let mut log = AttemptLog::open(&log)?;
-                let out = run_attempt(
+                let out = grasp::run::pipeline::run_attempt(
                     &mut arm,
                     &robot,
                     &plan,
