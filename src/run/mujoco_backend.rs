@@ -36,16 +36,15 @@
 
 use super::mjcf::{self, MujocoSettings};
 use super::raw_model::RawModel;
-use super::sim_backend::{SimBackendConfig, GUARD_MAX_M, GUARD_STEP_M, MAX_PALM_TILT_RAD};
 use super::simulated::SimulatedArm;
+use super::simulated::{guarded_placement, top_down_placement, SimBackendConfig, GUARD_STEP_M};
 use crate::hardware::pointcloud::CloudError;
 use crate::hardware::{
     check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
 };
 use crate::perception::camera::{camera_cloud_at, CameraConfig};
-use crate::robot::grasp_map::hand_grasp_frame;
 use crate::robot::joints::{actuator_sums, COUPLED_FINGERS, HAND_JOINTS};
-use crate::robot::{ur10e, Posture, Robot};
+use crate::robot::{Posture, Robot};
 use crate::sim::placement::hand_root_pose;
 use crate::sim::world::finger_grip;
 use crate::sim::{LiftOutcome, ObjectShape, ObjectSpec, SimConfig};
@@ -310,28 +309,17 @@ impl MujocoHandArm {
         hand_yaw: f64,
     ) -> Result<(), HwError> {
         let start = self.clamp_targets(start);
-        let mut gp = *grasp_point;
-        let mut raised = 0.0;
         self.clock_base += self.data.time();
-        loop {
+        let mut gp = *grasp_point;
+        let raised = guarded_placement(|raise| {
+            if raise {
+                gp.z += GUARD_STEP_M;
+            }
             let root = hand_root_pose(&self.robot, &gp, hand_yaw, &start)
                 .map_err(|e| cmd_err("arm joints", e.to_string()))?;
             self.reset_world(&root, &start);
-            if !self.hand_overlaps_object() {
-                break;
-            }
-            if raised >= GUARD_MAX_M - 1e-12 {
-                return Err(cmd_err(
-                    "arm joints",
-                    format!(
-                        "the hand overlaps the object even {:.0} mm above this pose",
-                        GUARD_MAX_M * 1000.0
-                    ),
-                ));
-            }
-            gp.z += GUARD_STEP_M;
-            raised += GUARD_STEP_M;
-        }
+            Ok(self.hand_overlaps_object())
+        })?;
         self.guard_raise = raised;
         self.lift = None;
         Ok(())
@@ -380,30 +368,6 @@ impl MujocoHandArm {
                 && ((self.ids.hand[g1 as usize] && self.ids.object[g2 as usize])
                     || (self.ids.hand[g2 as usize] && self.ids.object[g1 as usize]))
         })
-    }
-
-    /// The hand's start posture, grasp point and yaw that put the flange where the arm at
-    /// `q` does (palm down only), as the Rapier backend.
-    fn placement_for_arm(&self, q: &[f64; 6]) -> Result<(Point3<f64>, f64), HwError> {
-        let robot = &self.robot;
-        let hand_q = self.targets;
-        let flange = self.cfg.arm_base.pose() * ur10e::fk(q);
-        let palm = flange * robot.hand_fk_palm(&hand_q)[robot.hand.forearm].inverse();
-        let gf: Isometry3<f64> = palm
-            * hand_grasp_frame(robot, &hand_q)
-                .map_err(|e| cmd_err("hand posture", e.to_string()))?;
-        let approach = gf.rotation * Vector3::x();
-        let tilt = approach.angle(&-Vector3::z());
-        if tilt.is_nan() || tilt > MAX_PALM_TILT_RAD {
-            return Err(cmd_err(
-                "arm joints",
-                format!(
-                    "the simulator places the hand palm down only; this pose tilts the palm normal {tilt:.3} rad from the vertical"
-                ),
-            ));
-        }
-        let y = gf.rotation * Vector3::y();
-        Ok((Point3::from(gf.translation.vector), y.y.atan2(y.x)))
     }
 
     /// One physics step and the failure checks; false once the physics has failed.
@@ -722,8 +686,8 @@ impl HandArm for MujocoHandArm {
         motion.validate()?;
         match *motion {
             ArmMotion::Joints(q) => {
-                let (gp, yaw) = self.placement_for_arm(&q)?;
                 let start = self.targets;
+                let (gp, yaw) = top_down_placement(&self.robot, &self.cfg.arm_base, &start, &q)?;
                 self.place(&start, &gp, yaw)
             }
             ArmMotion::Lift { height_m, .. } => {
@@ -846,7 +810,8 @@ mod tests {
         let g = TwoFingerGrasp::top_down(Point3::new(0.0, 0.0, 0.05), 0.0);
         let root = root_pose_for(&robot, &q_hand, &g).unwrap();
         let base = a.config().arm_base.pose();
-        let q = ur10e::ik(&(base.inverse() * root), &ur10e::HOME).unwrap();
+        let q =
+            crate::robot::ur10e::ik(&(base.inverse() * root), &crate::robot::ur10e::HOME).unwrap();
         a.move_arm(&ArmMotion::Joints(q)).unwrap();
         let closed = crate::sim::script::power_grasp();
         let start = a.targets;

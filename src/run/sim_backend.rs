@@ -45,22 +45,15 @@ use crate::hardware::pointcloud::CloudError;
 use crate::hardware::{
     check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
 };
-use crate::robot::grasp_map::hand_grasp_frame;
-use crate::robot::{ur10e, Posture, Robot};
+use crate::robot::{Posture, Robot};
 use crate::sim::settle::Unsettled;
 use crate::sim::{HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig};
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Point3};
 
 pub use super::raw_model::{RawModel, RawModelConfig};
+use super::simulated::{guarded_placement, top_down_placement};
 
-/// Largest tilt of the palm normal from the vertical that the simulator accepts (rad).
-pub const MAX_PALM_TILT_RAD: f64 = 1e-3;
-/// Step of the guarded placement (m).
-pub const GUARD_STEP_M: f64 = 0.005;
-/// Largest raise of the guarded placement (m).
-pub const GUARD_MAX_M: f64 = 0.10;
-
-pub use super::simulated::SimBackendConfig;
+pub use super::simulated::{SimBackendConfig, GUARD_MAX_M, GUARD_STEP_M, MAX_PALM_TILT_RAD};
 pub use crate::perception::camera::{camera_cloud, CameraConfig};
 
 /// The simulated hand-arm system (see the module docs).
@@ -207,28 +200,17 @@ impl SimHandArm {
     /// overlaps the object.
     fn place(&mut self, mut scene: Scene) -> Result<(), HwError> {
         self.clock_base += self.sim.time();
-        let mut raised = 0.0;
-        loop {
+        let raised = guarded_placement(|raise| {
+            if raise {
+                scene.grasp_point[2] += GUARD_STEP_M;
+            }
             match &self.kept_object {
                 Some(pose) => self.sim.reset_with_object_pose(&scene, pose),
                 None => self.sim.reset(&scene),
             }
             .map_err(sim_err)?;
-            if !self.sim.hand_overlaps_object() {
-                break;
-            }
-            if raised >= GUARD_MAX_M - 1e-12 {
-                return Err(HwError::InvalidCommand {
-                    field: "arm joints".into(),
-                    detail: format!(
-                        "the hand overlaps the object even {:.0} mm above this pose",
-                        GUARD_MAX_M * 1000.0
-                    ),
-                });
-            }
-            scene.grasp_point[2] += GUARD_STEP_M;
-            raised += GUARD_STEP_M;
-        }
+            Ok(self.sim.hand_overlaps_object())
+        })?;
         self.guard_raise = raised;
         self.lift = None;
         Ok(())
@@ -236,33 +218,14 @@ impl SimHandArm {
 
     /// The scene that puts the hand where the arm at `q` puts the flange.
     fn scene_for_arm(&self, q: &[f64; 6]) -> Result<Scene, HwError> {
-        let robot = self.sim.robot();
         let hand_q = self.sim.targets();
-        let flange = self.cfg.arm_base.pose() * ur10e::fk(q);
-        let palm = flange * robot.hand_fk_palm(&hand_q)[robot.hand.forearm].inverse();
-        let gf: Isometry3<f64> = palm
-            * hand_grasp_frame(robot, &hand_q).map_err(|e| HwError::InvalidCommand {
-                field: "hand posture".into(),
-                detail: e.to_string(),
-            })?;
-        let approach = gf.rotation * Vector3::x();
-        let tilt = approach.angle(&-Vector3::z());
-        if tilt.is_nan() || tilt > MAX_PALM_TILT_RAD {
-            return Err(HwError::InvalidCommand {
-                field: "arm joints".into(),
-                detail: format!(
-                    "the simulator places the hand palm down only; this pose tilts the palm normal {tilt:.3} rad from the vertical"
-                ),
-            });
-        }
-        let y = gf.rotation * Vector3::y();
-        let p = gf.translation.vector;
+        let (p, hand_yaw) = top_down_placement(self.sim.robot(), &self.cfg.arm_base, &hand_q, q)?;
         Ok(Scene {
             start: hand_q,
             object_xy: self.cfg.object_xy,
             object_yaw: self.cfg.object_yaw,
             grasp_point: [p.x, p.y, p.z],
-            hand_yaw: y.y.atan2(y.x),
+            hand_yaw,
         })
     }
 
@@ -402,7 +365,8 @@ impl super::simulated::SimulatedArm for SimHandArm {
 mod tests {
     use super::*;
     use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
-    use crate::robot::Side;
+    use crate::robot::{ur10e, Side};
+    use nalgebra::Vector3;
 
     fn arm(cfg: SimBackendConfig) -> SimHandArm {
         let robot = Robot::builtin(Side::Left);

@@ -13,6 +13,9 @@ use nalgebra::Point3;
 use super::pipeline::ArmBase;
 use super::raw_model::RawModelConfig;
 use crate::perception::camera::CameraConfig;
+use crate::robot::grasp_map::hand_grasp_frame;
+use crate::robot::ur10e;
+use nalgebra::{Isometry3, Vector3};
 
 /// A hand-arm whose world is simulated: built around one object, it can show the object to simulated depth cameras, press a fingertip with a known force (calibration), let the object settle for a retry, and judge a lift (HandArm::lift_outcome).
 pub trait SimulatedArm: crate::hardware::HandArm + Sized {
@@ -108,4 +111,68 @@ impl Default for SimBackendConfig {
             home_clearance: 0.15,
         }
     }
+}
+
+/// Largest tilt of the palm normal from the vertical that the simulated robots accept (rad).
+pub const MAX_PALM_TILT_RAD: f64 = 1e-3;
+/// Step of the guarded placement (m).
+pub const GUARD_STEP_M: f64 = 0.005;
+/// Largest raise of the guarded placement (m).
+pub const GUARD_MAX_M: f64 = 0.10;
+
+/// Where the simulated robots put the hand for the arm at joint angles `q` (base at
+/// `arm_base`, hand in posture `hand_q`): the grasp point (the TH/LF tip midpoint, world
+/// frame) and the hand's yaw. They carry the hand palm down only, so a pose whose palm
+/// normal is more than [`MAX_PALM_TILT_RAD`] from the vertical is refused.
+pub fn top_down_placement(
+    robot: &Robot,
+    arm_base: &ArmBase,
+    hand_q: &[f64; 24],
+    q: &[f64; 6],
+) -> Result<(Point3<f64>, f64), HwError> {
+    let flange = arm_base.pose() * ur10e::fk(q);
+    let palm = flange * robot.hand_fk_palm(hand_q)[robot.hand.forearm].inverse();
+    let gf: Isometry3<f64> = palm
+        * hand_grasp_frame(robot, hand_q).map_err(|e| HwError::InvalidCommand {
+            field: "hand posture".into(),
+            detail: e.to_string(),
+        })?;
+    let approach = gf.rotation * Vector3::x();
+    let tilt = approach.angle(&-Vector3::z());
+    if tilt.is_nan() || tilt > MAX_PALM_TILT_RAD {
+        return Err(HwError::InvalidCommand {
+            field: "arm joints".into(),
+            detail: format!(
+                "the simulator places the hand palm down only; this pose tilts the palm normal {tilt:.3} rad from the vertical"
+            ),
+        });
+    }
+    let y = gf.rotation * Vector3::y();
+    Ok((Point3::from(gf.translation.vector), y.y.atan2(y.x)))
+}
+
+/// The guarded placement of the simulated robots: `place(raise)` resets the world with the
+/// hand where it was last placed, first raised by [`GUARD_STEP_M`] when `raise`, and says
+/// whether the hand overlaps the object; the hand is raised step by step until it does not
+/// (as a guarded approach that stops at first contact would). The raise used, or an error
+/// past [`GUARD_MAX_M`].
+pub fn guarded_placement(
+    mut place: impl FnMut(bool) -> Result<bool, HwError>,
+) -> Result<f64, HwError> {
+    let mut raised = 0.0;
+    let mut overlaps = place(false)?;
+    while overlaps {
+        if raised >= GUARD_MAX_M - 1e-12 {
+            return Err(HwError::InvalidCommand {
+                field: "arm joints".into(),
+                detail: format!(
+                    "the hand overlaps the object even {:.0} mm above this pose",
+                    GUARD_MAX_M * 1000.0
+                ),
+            });
+        }
+        raised += GUARD_STEP_M;
+        overlaps = place(true)?;
+    }
+    Ok(raised)
 }
