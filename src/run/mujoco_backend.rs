@@ -89,9 +89,9 @@ pub struct MujocoHandArm {
     extra_force: [f64; N_TACTILE],
     lift: Option<LiftOutcome>,
     failure: Option<String>,
-    /// The deepest object contact since the hand was last placed (m) and what the object
-    /// touched there.
-    deepest: Option<(f64, String)>,
+    /// The deepest object contact since the hand was last placed (m) and the geom the
+    /// object touched there.
+    deepest: Option<(f64, usize)>,
     object_start: Vector3<f64>,
     kept_object: Option<Isometry3<f64>>,
     guard_raise: f64,
@@ -224,24 +224,34 @@ impl MujocoHandArm {
         (p(aabb.mins), p(aabb.maxs))
     }
 
+    /// The object's contacts now: each one's index, its signed distance (m, negative when
+    /// penetrating) and the geom the object touches there.
+    fn object_contacts(&self) -> impl Iterator<Item = (usize, f64, usize)> + '_ {
+        self.data.contact().iter().enumerate().filter_map(|(i, c)| {
+            let (g1, g2) = (
+                usize::try_from(c.geom[0]).ok()?,
+                usize::try_from(c.geom[1]).ok()?,
+            );
+            let other = if self.ids.object[g1] {
+                g2
+            } else if self.ids.object[g2] {
+                g1
+            } else {
+                return None;
+            };
+            Some((i, c.dist, other))
+        })
+    }
+
     /// Per finger, the normal force (N) of the object on its distal phalanx; and the total
     /// normal force between the object and the hand.
     pub fn contact_forces(&self) -> ([f64; N_TACTILE], f64) {
         let mut tip = [0.0; N_TACTILE];
         let mut hand = 0.0;
-        for (i, c) in self.data.contact().iter().enumerate() {
-            let (g1, g2) = (c.geom[0], c.geom[1]);
-            if g1 < 0 || g2 < 0 {
+        for (i, _, hand_geom) in self.object_contacts() {
+            if !self.ids.hand[hand_geom] {
                 continue;
             }
-            let (g1, g2) = (g1 as usize, g2 as usize);
-            let hand_geom = if self.ids.object[g1] && self.ids.hand[g2] {
-                g2
-            } else if self.ids.object[g2] && self.ids.hand[g1] {
-                g1
-            } else {
-                continue;
-            };
             let f = self.data.contact_force(i)[0].max(0.0);
             hand += f;
             if let Some(k) = self.ids.distal[hand_geom] {
@@ -360,14 +370,8 @@ impl MujocoHandArm {
     }
 
     fn hand_overlaps_object(&self) -> bool {
-        self.data.contact().iter().any(|c| {
-            let (g1, g2) = (c.geom[0], c.geom[1]);
-            g1 >= 0
-                && g2 >= 0
-                && c.dist < 0.0
-                && ((self.ids.hand[g1 as usize] && self.ids.object[g2 as usize])
-                    || (self.ids.hand[g2 as usize] && self.ids.object[g1 as usize]))
-        })
+        self.object_contacts()
+            .any(|(_, dist, other)| dist < 0.0 && self.ids.hand[other])
     }
 
     /// One physics step and the failure checks; false once the physics has failed.
@@ -376,50 +380,31 @@ impl MujocoHandArm {
             return false;
         }
         self.data.step();
-        if let Some((d, with)) = self.deepest_now() {
-            if self.deepest.as_ref().is_none_or(|(best, _)| d > *best) {
-                self.deepest = Some((d, with));
+        let deepest = self.deepest_now();
+        if let Some((d, g)) = deepest {
+            if self.deepest.is_none_or(|(best, _)| d > best) {
+                self.deepest = Some((d, g));
             }
         }
-        self.failure = self.check_failure();
+        self.failure = self.check_failure(deepest.map_or(0.0, |(d, _)| d));
         self.failure.is_none()
     }
 
-    /// The deepest penetration of the object now (m) and what it touches there: a hand
-    /// link's name or `table`; `None` without a penetrating contact.
-    fn deepest_now(&self) -> Option<(f64, String)> {
-        let m = self.data.model();
+    /// The deepest penetration of the object now (m) and the geom it touches there; `None`
+    /// without a penetrating contact.
+    fn deepest_now(&self) -> Option<(f64, usize)> {
         let mut best: Option<(f64, usize)> = None;
-        for c in self.data.contact() {
-            let (g1, g2) = (c.geom[0], c.geom[1]);
-            if g1 < 0 || g2 < 0 || c.dist >= 0.0 {
-                continue;
-            }
-            let other = if self.ids.object[g1 as usize] {
-                g2 as usize
-            } else if self.ids.object[g2 as usize] {
-                g1 as usize
-            } else {
-                continue;
-            };
-            if best.is_none_or(|(d, _)| -c.dist > d) {
-                best = Some((-c.dist, other));
+        for (_, dist, other) in self.object_contacts() {
+            if dist < 0.0 && best.is_none_or(|(d, _)| -dist > d) {
+                best = Some((-dist, other));
             }
         }
-        best.map(|(d, g)| {
-            let with = if self.ids.hand[g] {
-                let body = m.geom_bodyid()[g] as usize;
-                m.id_to_name(MjtObjBase::mjOBJ_BODY, body)
-                    .unwrap_or("hand")
-                    .to_string()
-            } else {
-                "table".to_string()
-            };
-            (d, with)
-        })
+        best
     }
 
-    fn check_failure(&self) -> Option<String> {
+    /// The physics failure of the state now, if any; `deepest` is the deepest object
+    /// contact now (m, [`Self::deepest_now`]).
+    fn check_failure(&self, deepest: f64) -> Option<String> {
         let bad_acc = self.data.warning()[MjtWarning::mjWARN_BADQACC as usize].number;
         if bad_acc > 0 {
             return Some(format!(
@@ -447,13 +432,11 @@ impl MujocoHandArm {
         if travel > f.max_object_travel {
             return Some(format!("the object travelled {travel:.3} m"));
         }
-        if let Some((depth, _)) = self.deepest_now() {
-            if depth > f.max_penetration {
-                return Some(format!(
-                    "an object contact is {:.1} mm deep",
-                    depth * 1000.0
-                ));
-            }
+        if deepest > f.max_penetration {
+            return Some(format!(
+                "an object contact is {:.1} mm deep",
+                deepest * 1000.0
+            ));
         }
         None
     }
@@ -657,8 +640,19 @@ impl SimulatedArm for MujocoHandArm {
         self.lift.clone()
     }
 
+    /// The depth and what the object touched: a hand link's name, or `table`.
     fn deepest_contact(&self) -> Option<(f64, String)> {
-        self.deepest.clone()
+        let (d, g) = self.deepest?;
+        let with = if self.ids.hand[g] {
+            let m = self.data.model();
+            let body = m.geom_bodyid()[g] as usize;
+            m.id_to_name(MjtObjBase::mjOBJ_BODY, body)
+                .unwrap_or("hand")
+                .to_string()
+        } else {
+            "table".to_string()
+        };
+        Some((d, with))
     }
 }
 
