@@ -436,6 +436,25 @@ pub fn hand_facts(side: Side) -> Vec<JointFact> {
     facts
 }
 
+/// Hand targets as the motors take them: the coupled fingers' J1 and J2 each get half of
+/// their J0 = J1 + J2, then every target is clamped to its joint's `limits` (24 angles,
+/// paper order). Both simulated engines apply this before their PD laws.
+pub fn couple_and_clamp(t: &[f64; 24], limits: &[(f64, f64); 24]) -> [f64; 24] {
+    let mut out = *t;
+    for f in COUPLED_FINGERS {
+        if let (Some(j2), Some(j1)) = (hand_index(&format!("{f}J2")), hand_index(&format!("{f}J1")))
+        {
+            let j0 = out[j2] + out[j1];
+            out[j2] = j0 / 2.0;
+            out[j1] = j0 / 2.0;
+        }
+    }
+    for (v, (lo, hi)) in out.iter_mut().zip(limits) {
+        *v = v.clamp(*lo, *hi);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

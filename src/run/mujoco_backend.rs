@@ -43,7 +43,7 @@ use crate::hardware::{
     check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
 };
 use crate::perception::camera::{camera_cloud_at, CameraConfig};
-use crate::robot::joints::{actuator_sums, COUPLED_FINGERS, HAND_JOINTS};
+use crate::robot::joints::{actuator_sums, couple_and_clamp, HAND_JOINTS};
 use crate::robot::{Posture, Robot};
 use crate::sim::placement::hand_root_pose;
 use crate::sim::world::finger_grip;
@@ -279,21 +279,9 @@ impl MujocoHandArm {
         self.raw.reading(t, &q, &tip, &effort)
     }
 
-    /// Targets clamped to the joint limits, coupled J1 = J2 = J0 / 2 (as Rapier's).
+    /// Targets as Rapier's motors take them ([`couple_and_clamp`]).
     fn clamp_targets(&self, t: &[f64; N_HAND_JOINTS]) -> [f64; N_HAND_JOINTS] {
-        let mut out = *t;
-        for f in COUPLED_FINGERS {
-            let j2 = crate::sim::hand_index(&format!("{f}J2"));
-            let j1 = crate::sim::hand_index(&format!("{f}J1"));
-            let j0 = out[j2] + out[j1];
-            out[j2] = j0 / 2.0;
-            out[j1] = j0 / 2.0;
-        }
-        let limits = self.robot.hand_limits();
-        for (k, (lo, hi)) in limits.iter().enumerate() {
-            out[k] = out[k].clamp(*lo, *hi);
-        }
-        out
+        couple_and_clamp(t, &self.robot.hand_limits())
     }
 
     fn apply_controls(&mut self) {

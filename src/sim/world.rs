@@ -37,7 +37,7 @@ use super::contact::HullContactDispatcher;
 use super::object::{ObjectError, ObjectSpec};
 use super::placement::{hand_root_pose, PlacementError};
 use super::sensors::{near_limit, pd_effort, spring_rest, Sensors};
-use crate::robot::joints::{COUPLED_FINGERS, HAND_JOINTS};
+use crate::robot::joints::HAND_JOINTS;
 use crate::robot::Robot;
 use crate::util::levels::torque_level;
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
@@ -618,18 +618,8 @@ impl HandSim {
 
     /// Clamps to limits and applies the J1 = J2 = J0/2 coupling.
     fn clamp_targets(&self, t: &[f64; 24]) -> [f64; 24] {
-        let mut out = *t;
-        for f in COUPLED_FINGERS {
-            let j2 = super::hand_index(&format!("{f}J2"));
-            let j1 = super::hand_index(&format!("{f}J1"));
-            let j0 = out[j2] + out[j1];
-            out[j2] = j0 / 2.0;
-            out[j1] = j0 / 2.0;
-        }
-        for (k, hj) in self.joints.iter().enumerate() {
-            out[k] = out[k].clamp(hj.lower, hj.upper);
-        }
-        out
+        let limits = self.joints.map(|hj| (hj.lower, hj.upper));
+        crate::robot::joints::couple_and_clamp(t, &limits)
     }
 
     /// Sets the 24 joint targets (paper order; rad). Coupled joints follow J0 = J1 + J2
