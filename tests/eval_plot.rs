@@ -126,19 +126,7 @@ fn the_plot_shows_every_agent_and_object_and_redraws_from_the_json() {
 fn plot_errors_are_clear_and_come_before_the_evaluation() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
-    let eval = |plot: &str| {
-        grasp(&[
-            "eval",
-            "--policy",
-            "baseline2",
-            "--objects",
-            "box_sugar",
-            "--trials",
-            "1",
-            "--plot",
-            plot,
-        ])
-    };
+    let eval = |plot: &str| eval_one(&["--plot", plot]);
     let png = format!("{d}/p.png");
     let o = eval(&png);
     assert_fails(&o, &["p.png", "must end in .svg"]);

@@ -457,6 +457,31 @@ pub fn couple_and_clamp(t: &[f64; 24], limits: &[(f64, f64); 24]) -> [f64; 24] {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn couple_and_clamp_splits_j0_and_clamps_hand_computed() {
+        let mut limits = [(-1.0, 1.0); 24];
+        let ff3 = hand_index("FFJ3").unwrap();
+        limits[ff3] = (0.0, 0.5);
+        let mut t = [0.0; 24];
+        let (ff2, ff1) = (hand_index("FFJ2").unwrap(), hand_index("FFJ1").unwrap());
+        // J0 = 0.9 + 0.1 = 1.0: each gets 0.5.
+        t[ff2] = 0.9;
+        t[ff1] = 0.1;
+        // 0.8 is above FFJ3's upper limit 0.5; -3 below the others' -1.
+        t[ff3] = 0.8;
+        let th1 = hand_index("THJ1").unwrap();
+        t[th1] = -3.0;
+        let out = couple_and_clamp(&t, &limits);
+        assert_eq!((out[ff2], out[ff1]), (0.5, 0.5));
+        assert_eq!(out[ff3], 0.5);
+        assert_eq!(out[th1], -1.0);
+        // The thumb is not coupled: THJ2 keeps its own target.
+        let th2 = hand_index("THJ2").unwrap();
+        t[th2] = 0.3;
+        assert_eq!(couple_and_clamp(&t, &limits)[th2], 0.3);
+    }
+
     use super::*;
 
     #[test]
