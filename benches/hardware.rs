@@ -2,8 +2,8 @@
 //! PCA normals (brute-force neighbours) and antipodal candidate sampling.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use grasp::hardware::partial_view::sample_box_surface;
-use grasp::hardware::pointcloud::{
+use grasp::perception::partial_view::sample_box_surface;
+use grasp::perception::pointcloud::{
     antipodal_grasps, estimate_normals, AntipodalConfig, PointCloud,
 };
 use nalgebra::{Point3, Vector3};

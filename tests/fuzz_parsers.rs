@@ -352,7 +352,7 @@ fn point_clouds() {
     ] {
         let seed = read(f);
         check(f, 2000, &seed, usize::MAX, name, |b| {
-            grasp::hardware::pointcloud::parse_pcd(Path::new(name), b)
+            grasp::perception::pointcloud::parse_pcd(Path::new(name), b)
         });
     }
     for (f, name) in [
@@ -361,7 +361,7 @@ fn point_clouds() {
     ] {
         let seed = read(f);
         check(f, 2000, &seed, usize::MAX, name, |b| {
-            grasp::hardware::pointcloud::parse_ply(Path::new(name), b)
+            grasp::perception::pointcloud::parse_ply(Path::new(name), b)
         });
     }
 }

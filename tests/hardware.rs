@@ -5,10 +5,10 @@
 use grasp::env::obs::{Modality, ObsLayout};
 use grasp::hardware::calibration::{calibrate, TactileCalibration};
 use grasp::hardware::log::{read_log, AttemptLog, LogRecord, OutcomeRecord, StepRecord};
-use grasp::hardware::pointcloud::{grasp_candidates, AntipodalConfig, CloudError, PointCloud};
 use grasp::hardware::safety::{ClampReason, SafeHandArm, SafetyConfig};
 use grasp::hardware::torque::TorqueMapper;
 use grasp::hardware::{ArmMotion, HandArm, HwError, RawSensors};
+use grasp::perception::pointcloud::{grasp_candidates, AntipodalConfig, CloudError, PointCloud};
 use grasp::robot::{Robot, Side};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};

@@ -298,8 +298,12 @@ fn minutes_are_bounded_everywhere() {
 fn cloud(dir: &Path, name: &str, points: &[[f64; 3]]) -> PathBuf {
     let p = dir.join(name);
     let pts: Vec<nalgebra::Point3<f64>> = points.iter().map(|&q| q.into()).collect();
-    grasp::hardware::pointcloud::write_pcd(&p, &pts, grasp::hardware::pointcloud::PcdData::Ascii)
-        .unwrap();
+    grasp::perception::pointcloud::write_pcd(
+        &p,
+        &pts,
+        grasp::perception::pointcloud::PcdData::Ascii,
+    )
+    .unwrap();
     p
 }
 

@@ -4,10 +4,10 @@
 
 use grasp::hardware::calibration::{TactileCalibration, DEFAULT_THRESHOLD_FRACTION};
 use grasp::hardware::log::{read_log, LogRecord};
-use grasp::hardware::pointcloud::{write_pcd, PcdData};
 use grasp::hardware::safety::{ClampReason, SafeHandArm, SafetyConfig};
 use grasp::hardware::torque::TorqueMapper;
 use grasp::hardware::{HandArm, HwError};
+use grasp::perception::pointcloud::{write_pcd, PcdData};
 use grasp::robot::{Robot, Side};
 use grasp::run::calibrate::calibrate_tactile;
 use grasp::run::sim_backend::{SimBackendConfig, SimHandArm};

@@ -5,9 +5,9 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use grasp::hardware::calibration::TactileCalibration;
 use grasp::hardware::log::AttemptLog;
-use grasp::hardware::pointcloud::{write_pcd, PcdData, PointCloud};
 use grasp::hardware::safety::SafeHandArm;
 use grasp::hardware::HandArm;
+use grasp::perception::pointcloud::{write_pcd, PcdData, PointCloud};
 use grasp::robot::{Robot, Side};
 use grasp::run::pipeline::{
     load_grasp_file, AttemptOutcome, Controller, GraspFile, GraspPlan, GraspSource, PipelineConfig,

@@ -46,12 +46,10 @@ impl std::str::FromStr for Modality {
     }
 }
 
-/// Number of fingertip tactile sensors.
-pub const N_TACTILE: usize = 5;
-/// Number of actuators reporting a torque level.
-pub const N_TORQUE: usize = 20;
-/// Number of joint angles.
-pub const N_JOINTS: usize = 24;
+// The counts are the robot's ([`crate::robot::joints`]).
+pub use crate::robot::joints::{N_JOINTS, N_TACTILE};
+/// Number of torque levels in a frame: one per actuator.
+pub const N_TORQUE: usize = crate::robot::joints::N_ACTUATORS;
 /// Number of surface-vector values of M3G (6 points x 3).
 pub const N_SURFACE: usize = 18;
 /// Number of torque levels.

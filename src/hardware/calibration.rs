@@ -10,8 +10,8 @@
 //! The calibration is stored as a small JSON file:
 //! `{"lower": [5 numbers], "upper": [5 numbers], "threshold_fraction": 0.003}`.
 
-use super::N_TACTILE;
 use crate::robot::joints::FINGERS;
+use crate::robot::joints::N_TACTILE;
 use std::path::{Path, PathBuf};
 
 /// The paper's contact threshold: 0.3 % of the sensor range.

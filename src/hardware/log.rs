@@ -13,7 +13,7 @@
 //! Call [`AttemptLog::sync`] to force the data to disk (e.g. after the outcome line).
 
 use super::safety::ClampEvent;
-use super::{N_HAND_JOINTS, N_TACTILE, N_TENDONS};
+use crate::robot::joints::{N_ACTUATORS, N_JOINTS, N_TACTILE};
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -59,21 +59,21 @@ pub struct StepRecord {
     /// Backend time of the step (s).
     pub time_s: f64,
     /// Measured hand joint angles, paper order (rad).
-    pub joint_angles: [f64; N_HAND_JOINTS],
+    pub joint_angles: [f64; N_JOINTS],
     /// Raw fingertip readings.
     pub tactile_raw: [f64; N_TACTILE],
     /// Raw tendon readings.
-    pub tendon_raw: [f64; N_TENDONS],
+    pub tendon_raw: [f64; N_ACTUATORS],
     /// Binary tactile observation.
     pub tactile: [bool; N_TACTILE],
     /// Drift-compensated tendon values `tau_j - tau_j0`.
-    pub torque_mapped: [f64; N_TENDONS],
+    pub torque_mapped: [f64; N_ACTUATORS],
     /// Torque levels 0..5.
-    pub torque_levels: [u8; N_TENDONS],
+    pub torque_levels: [u8; N_ACTUATORS],
     /// The policy's action (its length depends on the action space).
     pub action: Vec<f64>,
     /// The hand targets sent after clamping (rad).
-    pub targets: [f64; N_HAND_JOINTS],
+    pub targets: [f64; N_JOINTS],
     /// Targets changed by the safety limiter.
     pub clamp_events: Vec<ClampEvent>,
 }

@@ -11,8 +11,6 @@
 //! - [`torque`]: tendon-force drift compensation (`tau_j - tau_j0`) and torque levels.
 //! - [`safety`]: joint-limit and step clamping, the sensor watchdog, the safe wrapper.
 //! - [`log`]: JSON-lines attempt logs that survive a crash.
-//! - [`pointcloud`] and [`partial_view`]: re-exported from [`crate::perception`] (PCD/PLY
-//!   readers, antipodal candidates, synthetic partial views).
 //! - `ros` (cargo feature `ros`): a rosbridge v2 client implementing [`HandArm`] for the
 //!   Shadow hand's ROS 1 driver and the UR10e.
 
@@ -23,20 +21,11 @@ pub mod ros;
 pub mod safety;
 pub mod torque;
 
-// The point-cloud code lives below the environment layer (the antipodal pre-grasp is
-// planned in training too); these paths stay for the robot-facing code.
-pub use crate::perception::{partial_view, pointcloud};
+// The counts of what the hand reports are the robot's: joint angles (paper order, see
+// [`HAND_JOINTS`]), fingertip tactile sensors, and tendon-force channels, one per
+// actuator.
+use crate::robot::joints::{HAND_JOINTS, N_ACTUATORS, N_JOINTS, N_TACTILE};
 
-use crate::robot::joints::HAND_JOINTS;
-
-/// Number of hand joint angles read from the hand (paper order, see
-/// [`HAND_JOINTS`]).
-pub const N_HAND_JOINTS: usize = crate::env::obs::N_JOINTS;
-/// Number of fingertip tactile sensors (FF, MF, RF, LF, TH).
-pub const N_TACTILE: usize = crate::env::obs::N_TACTILE;
-/// Number of tendon-force channels, one per actuator (see
-/// [`actuators`](crate::robot::joints::actuators)).
-pub const N_TENDONS: usize = crate::env::obs::N_TORQUE;
 /// Number of UR10e arm joints.
 pub const N_ARM_JOINTS: usize = 6;
 
@@ -97,11 +86,11 @@ pub struct RawSensors {
     /// Time of the reading on the backend clock ([`HandArm::now`]), seconds.
     pub stamp: f64,
     /// The 24 hand joint angles, paper order (rad).
-    pub joint_angles: [f64; N_HAND_JOINTS],
+    pub joint_angles: [f64; N_JOINTS],
     /// Raw fingertip sensor values, FF, MF, RF, LF, TH (sensor units).
     pub tactile_raw: [f64; N_TACTILE],
     /// Raw tendon force (or joint effort) per actuator, paper actuator order.
-    pub tendon_raw: [f64; N_TENDONS],
+    pub tendon_raw: [f64; N_ACTUATORS],
 }
 
 impl RawSensors {
@@ -198,7 +187,7 @@ pub trait HandArm {
     /// Reads the latest hand signals.
     fn read(&mut self) -> Result<RawSensors, HwError>;
     /// Sends position targets for the 24 hand joints (paper order, rad).
-    fn command_hand(&mut self, targets: &[f64; N_HAND_JOINTS]) -> Result<(), HwError>;
+    fn command_hand(&mut self, targets: &[f64; N_JOINTS]) -> Result<(), HwError>;
     /// Starts (and, for blocking backends, completes) an arm motion.
     fn move_arm(&mut self, motion: &ArmMotion) -> Result<(), HwError>;
     /// Stops hand and arm where they are. Must be safe to call repeatedly.

@@ -25,8 +25,9 @@
 //! raised by the height (the arm base is assumed upright), inverse kinematics.
 //! [`HandArm::stop`] commands the hand and the arm to hold their measured positions.
 
-use super::{check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE};
+use super::{check_duration, ArmMotion, HandArm, HwError, RawSensors};
 use crate::robot::joints::HAND_JOINTS;
+use crate::robot::joints::{N_JOINTS, N_TACTILE};
 use crate::robot::ur10e;
 use nalgebra::{Isometry3, Translation3};
 use serde_json::{json, Value};
@@ -85,8 +86,8 @@ impl Default for RosConfig {
 /// The latest sensor state received.
 #[derive(Debug, Clone, Default)]
 struct State {
-    hand_q: Option<[f64; N_HAND_JOINTS]>,
-    hand_effort: [f64; N_HAND_JOINTS],
+    hand_q: Option<[f64; N_JOINTS]>,
+    hand_effort: [f64; N_JOINTS],
     arm_q: Option<[f64; 6]>,
     tactile: Option<[f64; N_TACTILE]>,
     stamp: f64,
@@ -129,7 +130,7 @@ impl RosDecoder {
     }
 
     /// The newest hand joint angles, if a complete `joint_states` message arrived.
-    pub fn hand_q(&self) -> Option<[f64; N_HAND_JOINTS]> {
+    pub fn hand_q(&self) -> Option<[f64; N_JOINTS]> {
         self.state.hand_q
     }
 
@@ -403,7 +404,7 @@ impl HandArm for RosHandArm {
         }
     }
 
-    fn command_hand(&mut self, targets: &[f64; N_HAND_JOINTS]) -> Result<(), HwError> {
+    fn command_hand(&mut self, targets: &[f64; N_JOINTS]) -> Result<(), HwError> {
         if let Some(k) = targets.iter().position(|v| !v.is_finite()) {
             return Err(HwError::InvalidCommand {
                 field: format!("targets[{k}] ({})", HAND_JOINTS[k]),

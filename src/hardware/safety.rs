@@ -9,8 +9,9 @@
 //!   [`HandArm::stop`] when the watchdog trips, a reading is invalid or out of limits,
 //!   or the emergency-stop flag is set.
 
-use super::{ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS};
+use super::{ArmMotion, HandArm, HwError, RawSensors};
 use crate::robot::joints::HAND_JOINTS;
+use crate::robot::joints::N_JOINTS;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -48,7 +49,7 @@ pub struct ClampEvent {
 /// Clamps hand targets to joint limits and to a maximum step per command.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SafetyLimiter {
-    limits: [(f64, f64); N_HAND_JOINTS],
+    limits: [(f64, f64); N_JOINTS],
     max_step: f64,
 }
 
@@ -57,7 +58,7 @@ impl SafetyLimiter {
     /// [`Robot::hand_limits`](crate::robot::Robot::hand_limits)) and a maximum change
     /// `max_step_rad` per command. Errors on non-finite or inverted limits or a
     /// non-positive step.
-    pub fn new(limits: [(f64, f64); N_HAND_JOINTS], max_step_rad: f64) -> Result<Self, HwError> {
+    pub fn new(limits: [(f64, f64); N_JOINTS], max_step_rad: f64) -> Result<Self, HwError> {
         for (k, &(lo, hi)) in limits.iter().enumerate() {
             if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
                 return Err(HwError::InvalidCommand {
@@ -79,7 +80,7 @@ impl SafetyLimiter {
     }
 
     /// The joint limits in use.
-    pub fn limits(&self) -> &[(f64, f64); N_HAND_JOINTS] {
+    pub fn limits(&self) -> &[(f64, f64); N_JOINTS] {
         &self.limits
     }
 
@@ -95,9 +96,9 @@ impl SafetyLimiter {
     /// measurements are an error: nothing may be sent.
     pub fn clamp(
         &self,
-        targets: &[f64; N_HAND_JOINTS],
-        measured: &[f64; N_HAND_JOINTS],
-    ) -> Result<([f64; N_HAND_JOINTS], Vec<ClampEvent>), HwError> {
+        targets: &[f64; N_JOINTS],
+        measured: &[f64; N_JOINTS],
+    ) -> Result<([f64; N_JOINTS], Vec<ClampEvent>), HwError> {
         if let Some(k) = targets.iter().position(|v| !v.is_finite()) {
             return Err(HwError::InvalidCommand {
                 field: format!("targets[{k}] ({})", HAND_JOINTS[k]),
@@ -112,7 +113,7 @@ impl SafetyLimiter {
         }
         let mut out = *targets;
         let mut events = Vec::new();
-        for k in 0..N_HAND_JOINTS {
+        for k in 0..N_JOINTS {
             let (lo, hi) = self.limits[k];
             let req = targets[k];
             let stepped = req.clamp(measured[k] - self.max_step, measured[k] + self.max_step);
@@ -227,7 +228,7 @@ pub struct SafeHandArm<B: HandArm> {
     watchdog: Watchdog,
     tolerance: f64,
     estop: Arc<AtomicBool>,
-    last_measured: Option<[f64; N_HAND_JOINTS]>,
+    last_measured: Option<[f64; N_JOINTS]>,
     last_events: Vec<ClampEvent>,
     stops: usize,
 }
@@ -238,7 +239,7 @@ impl<B: HandArm> SafeHandArm<B> {
     /// an emergency stop (a signal handler, a UI thread).
     pub fn new(
         backend: B,
-        limits: [(f64, f64); N_HAND_JOINTS],
+        limits: [(f64, f64); N_JOINTS],
         config: SafetyConfig,
         estop: Arc<AtomicBool>,
     ) -> Result<Self, HwError> {
@@ -344,7 +345,7 @@ impl<B: HandArm> HandArm for SafeHandArm<B> {
         Ok(r)
     }
 
-    fn command_hand(&mut self, targets: &[f64; N_HAND_JOINTS]) -> Result<(), HwError> {
+    fn command_hand(&mut self, targets: &[f64; N_JOINTS]) -> Result<(), HwError> {
         self.last_events.clear();
         self.check_estop()?;
         if let Err(e) = self.watchdog.check(self.backend.now()) {

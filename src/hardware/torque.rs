@@ -7,7 +7,7 @@
 //! [`torque_level`], the same function the simulator uses,
 //! with the real robot's thresholds {-200, -100, 0, 100, 200}.
 
-use super::N_TENDONS;
+use crate::robot::joints::N_ACTUATORS;
 use crate::util::levels::torque_level;
 
 /// The paper's thresholds for the real robot's tendon readings.
@@ -43,7 +43,7 @@ pub enum TorqueError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TorqueMapper {
     thresholds: [f64; 5],
-    baseline: Option<[f64; N_TENDONS]>,
+    baseline: Option<[f64; N_ACTUATORS]>,
 }
 
 impl TorqueMapper {
@@ -74,7 +74,7 @@ impl TorqueMapper {
     }
 
     /// The baseline `tau_j0`, if recorded.
-    pub fn baseline(&self) -> Option<&[f64; N_TENDONS]> {
+    pub fn baseline(&self) -> Option<&[f64; N_ACTUATORS]> {
         self.baseline.as_ref()
     }
 
@@ -82,9 +82,9 @@ impl TorqueMapper {
     /// of an attempt. Replaces any previous baseline.
     pub fn set_baseline<I>(&mut self, readings: I) -> Result<(), TorqueError>
     where
-        I: IntoIterator<Item = [f64; N_TENDONS]>,
+        I: IntoIterator<Item = [f64; N_ACTUATORS]>,
     {
-        let mut sum = [0.0; N_TENDONS];
+        let mut sum = [0.0; N_ACTUATORS];
         let mut n = 0usize;
         for r in readings {
             check_finite(&r)?;
@@ -106,20 +106,20 @@ impl TorqueMapper {
     }
 
     /// The drift-compensated values `tau_j - tau_j0`.
-    pub fn mapped(&self, raw: &[f64; N_TENDONS]) -> Result<[f64; N_TENDONS], TorqueError> {
+    pub fn mapped(&self, raw: &[f64; N_ACTUATORS]) -> Result<[f64; N_ACTUATORS], TorqueError> {
         let b = self.baseline.as_ref().ok_or(TorqueError::NoBaseline)?;
         check_finite(raw)?;
         Ok(std::array::from_fn(|k| raw[k] - b[k]))
     }
 
     /// The levels 0..5 of the drift-compensated values.
-    pub fn levels(&self, raw: &[f64; N_TENDONS]) -> Result<[u8; N_TENDONS], TorqueError> {
+    pub fn levels(&self, raw: &[f64; N_ACTUATORS]) -> Result<[u8; N_ACTUATORS], TorqueError> {
         let m = self.mapped(raw)?;
         Ok(m.map(|v| torque_level(v, &self.thresholds)))
     }
 }
 
-fn check_finite(r: &[f64; N_TENDONS]) -> Result<(), TorqueError> {
+fn check_finite(r: &[f64; N_ACTUATORS]) -> Result<(), TorqueError> {
     match r.iter().position(|v| !v.is_finite()) {
         Some(index) => Err(TorqueError::NonFinite {
             index,

@@ -66,6 +66,14 @@ pub const HAND_JOINTS: [&str; 24] = [
     "RFJ2", "RFJ1", "LFJ5", "LFJ4", "LFJ3", "LFJ2", "LFJ1", "THJ5", "THJ4", "THJ3", "THJ2", "THJ1",
 ];
 
+/// Number of hand joint angles ([`HAND_JOINTS`]): what the hand reports and the policy
+/// reads as `theta`.
+pub const N_JOINTS: usize = HAND_JOINTS.len();
+/// Number of fingertip tactile sensors, one per finger of [`FINGERS`].
+pub const N_TACTILE: usize = FINGERS.len();
+/// Number of actuators ([`actuators`]): one tendon-force channel and one torque level each.
+pub const N_ACTUATORS: usize = 20;
+
 /// The key closing joints of eq. 5 (mask M = 1).
 pub const KEY_CLOSING_JOINTS: [&str; 5] = ["FFJ3", "MFJ3", "RFJ3", "LFJ3", "THJ5"];
 

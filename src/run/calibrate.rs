@@ -6,7 +6,8 @@
 use super::simulated::SimulatedArm;
 use super::RunError;
 use crate::hardware::calibration::{TactileCalibration, TactileCalibrator};
-use crate::hardware::{HandArm, RawSensors, N_TACTILE};
+use crate::hardware::{HandArm, RawSensors};
+use crate::robot::joints::N_TACTILE;
 use serde::Serialize;
 
 /// What the calibration saw, for the report and for checks: per fingertip the mean and

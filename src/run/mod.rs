@@ -43,9 +43,9 @@ pub mod table;
 
 use crate::hardware::calibration::CalibrationError;
 use crate::hardware::log::LogError;
-use crate::hardware::pointcloud::CloudError;
 use crate::hardware::torque::TorqueError;
 use crate::hardware::HwError;
+use crate::perception::pointcloud::CloudError;
 use std::path::PathBuf;
 
 /// Error of a grasp attempt, a calibration or their setup. Every variant names what

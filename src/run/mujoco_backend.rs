@@ -38,12 +38,11 @@ use super::mjcf::{self, MujocoSettings};
 use super::raw_model::RawModel;
 use super::simulated::SimulatedArm;
 use super::simulated::{guarded_placement, top_down_placement, SimBackendConfig, GUARD_STEP_M};
-use crate::hardware::pointcloud::CloudError;
-use crate::hardware::{
-    check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
-};
+use crate::hardware::{check_duration, ArmMotion, HandArm, HwError, RawSensors};
 use crate::perception::camera::{camera_cloud_at, CameraConfig};
+use crate::perception::pointcloud::CloudError;
 use crate::robot::joints::{actuator_sums, couple_and_clamp, HAND_JOINTS};
+use crate::robot::joints::{N_JOINTS, N_TACTILE};
 use crate::robot::{Posture, Robot};
 use crate::sim::placement::hand_root_pose;
 use crate::sim::world::finger_grip;
@@ -55,9 +54,9 @@ use rapier3d::parry::bounding_volume::BoundingVolume;
 /// Ids into MuJoCo's arrays.
 struct Ids {
     /// Per hand joint (paper order): its `qpos` and `qvel` addresses and its actuator.
-    qpos: [usize; N_HAND_JOINTS],
-    dof: [usize; N_HAND_JOINTS],
-    act: [usize; N_HAND_JOINTS],
+    qpos: [usize; N_JOINTS],
+    dof: [usize; N_JOINTS],
+    act: [usize; N_JOINTS],
     /// The three lift joints' actuators.
     lift_act: [usize; 3],
     /// The object's free joint: `qpos` and `qvel` addresses, and its body.
@@ -81,7 +80,7 @@ pub struct MujocoHandArm {
     sim_cfg: SimConfig,
     cfg: SimBackendConfig,
     raw: RawModel,
-    targets: [f64; N_HAND_JOINTS],
+    targets: [f64; N_JOINTS],
     /// The mount's pose at the last placement.
     mount: Isometry3<f64>,
     lift_target: f64,
@@ -261,7 +260,7 @@ impl MujocoHandArm {
         (tip, hand)
     }
 
-    fn joint_state(&self) -> ([f64; N_HAND_JOINTS], [f64; N_HAND_JOINTS]) {
+    fn joint_state(&self) -> ([f64; N_JOINTS], [f64; N_JOINTS]) {
         let (q, v) = (self.data.qpos(), self.data.qvel());
         (
             std::array::from_fn(|n| q[self.ids.qpos[n]]),
@@ -280,7 +279,7 @@ impl MujocoHandArm {
     }
 
     /// Targets as Rapier's motors take them ([`couple_and_clamp`]).
-    fn clamp_targets(&self, t: &[f64; N_HAND_JOINTS]) -> [f64; N_HAND_JOINTS] {
+    fn clamp_targets(&self, t: &[f64; N_JOINTS]) -> [f64; N_JOINTS] {
         couple_and_clamp(t, &self.robot.hand_limits())
     }
 
@@ -289,7 +288,7 @@ impl MujocoHandArm {
         let (act, lift) = (self.ids.act, self.ids.lift_act);
         let targets = self.targets;
         let ctrl = self.data.ctrl_mut();
-        for n in 0..N_HAND_JOINTS {
+        for n in 0..N_JOINTS {
             ctrl[act[n]] = targets[n];
         }
         for k in 0..3 {
@@ -302,7 +301,7 @@ impl MujocoHandArm {
     /// the hand in [`GUARD_STEP_M`] steps while it overlaps the object.
     fn place(
         &mut self,
-        start: &[f64; N_HAND_JOINTS],
+        start: &[f64; N_JOINTS],
         grasp_point: &Point3<f64>,
         hand_yaw: f64,
     ) -> Result<(), HwError> {
@@ -323,7 +322,7 @@ impl MujocoHandArm {
         Ok(())
     }
 
-    fn reset_world(&mut self, root: &Isometry3<f64>, start: &[f64; N_HAND_JOINTS]) {
+    fn reset_world(&mut self, root: &Isometry3<f64>, start: &[f64; N_JOINTS]) {
         self.data.reset();
         self.failure = None;
         self.deepest = None;
@@ -347,7 +346,7 @@ impl MujocoHandArm {
         let oq = obj.rotation.quaternion();
         let ot = obj.translation.vector;
         let q = self.data.qpos_mut();
-        for n in 0..N_HAND_JOINTS {
+        for n in 0..N_JOINTS {
             q[ids_q[n]] = start[n];
         }
         q[a..a + 7].copy_from_slice(&[ot.x, ot.y, ot.z, oq.w, oq.i, oq.j, oq.k]);
@@ -437,7 +436,7 @@ impl MujocoHandArm {
     }
 
     /// The 24 joints' actuator forces (N m): the clamped PD law.
-    fn joint_efforts(&self) -> [f64; N_HAND_JOINTS] {
+    fn joint_efforts(&self) -> [f64; N_JOINTS] {
         let force = self.data.actuator_force();
         std::array::from_fn(|n| force[self.ids.act[n]])
     }
@@ -495,10 +494,10 @@ fn ids(robot: &Robot, m: &MjModel) -> Result<Ids, HwError> {
             .ok_or_else(|| missing(format!("actuator {name}")))
     };
     let (qadr, dadr) = (m.jnt_qposadr(), m.jnt_dofadr());
-    let mut qpos = [0; N_HAND_JOINTS];
-    let mut dof = [0; N_HAND_JOINTS];
-    let mut act = [0; N_HAND_JOINTS];
-    for n in 0..N_HAND_JOINTS {
+    let mut qpos = [0; N_JOINTS];
+    let mut dof = [0; N_JOINTS];
+    let mut act = [0; N_JOINTS];
+    for n in 0..N_JOINTS {
         let name = &robot.joints[robot.hand.joints[n]].name;
         let j = joint(name)?;
         qpos[n] = qadr[j] as usize;
@@ -649,7 +648,7 @@ impl HandArm for MujocoHandArm {
         Ok(self.reading())
     }
 
-    fn command_hand(&mut self, targets: &[f64; N_HAND_JOINTS]) -> Result<(), HwError> {
+    fn command_hand(&mut self, targets: &[f64; N_JOINTS]) -> Result<(), HwError> {
         if let Some(k) = targets.iter().position(|v| !v.is_finite()) {
             return Err(cmd_err(
                 &format!("targets[{k}] ({})", HAND_JOINTS[k]),

@@ -32,11 +32,12 @@ use crate::env::obs::{FrameStack, Modality, ObsLayout, N_SURFACE};
 use crate::eval::PolicyAgent;
 use crate::hardware::calibration::TactileCalibration;
 use crate::hardware::log::{AttemptLog, OutcomeRecord, StepRecord};
-use crate::hardware::pointcloud::AntipodalConfig;
 use crate::hardware::safety::{SafeHandArm, SafetyConfig};
 use crate::hardware::torque::{TorqueMapper, REAL_THRESHOLDS};
-use crate::hardware::{ArmMotion, HandArm, RawSensors, N_HAND_JOINTS, N_TENDONS};
+use crate::hardware::{ArmMotion, HandArm, RawSensors};
+use crate::perception::pointcloud::AntipodalConfig;
 use crate::perception::pregrasp::{DEFAULT_MAX_CANDIDATES, DEFAULT_MAX_TILT_RAD};
+use crate::robot::joints::{N_ACTUATORS, N_JOINTS};
 use crate::robot::{ur10e, Posture, Robot};
 use crate::sim::script;
 use crate::synergy::SynergyModel;
@@ -235,7 +236,7 @@ impl PipelineConfig {
 pub fn cloud_surface_vectors(
     robot: &Robot,
     root: &Isometry3<f64>,
-    q: &[f64; N_HAND_JOINTS],
+    q: &[f64; N_JOINTS],
     cloud: &[Point3<f64>],
 ) -> [f64; N_SURFACE] {
     let palm = root * robot.hand_fk_palm(q)[robot.hand.forearm].inverse();
@@ -397,8 +398,8 @@ pub struct AttemptOutcome {
 struct Mapped {
     raw: RawSensors,
     tactile: [bool; 5],
-    torque_mapped: [f64; N_TENDONS],
-    levels: [u8; N_TENDONS],
+    torque_mapped: [f64; N_ACTUATORS],
+    levels: [u8; N_ACTUATORS],
 }
 
 struct Attempt<'a, B: HandArm> {
@@ -408,7 +409,7 @@ struct Attempt<'a, B: HandArm> {
     log: &'a mut AttemptLog,
     step: u64,
     clamped: usize,
-    last_sent: [f64; N_HAND_JOINTS],
+    last_sent: [f64; N_JOINTS],
 }
 
 impl<B: HandArm> Attempt<'_, B> {
@@ -425,7 +426,7 @@ impl<B: HandArm> Attempt<'_, B> {
     /// Sends `targets` through the safety layer, lets `wait_s` pass, reads and logs.
     fn command(
         &mut self,
-        targets: &[f64; N_HAND_JOINTS],
+        targets: &[f64; N_JOINTS],
         action: Vec<f64>,
         wait_s: f64,
     ) -> Result<Mapped, RunError> {
@@ -467,7 +468,7 @@ impl<B: HandArm> Attempt<'_, B> {
         &mut self,
         m: &Mapped,
         action: Vec<f64>,
-        targets: [f64; N_HAND_JOINTS],
+        targets: [f64; N_JOINTS],
         clamp_events: Vec<crate::hardware::safety::ClampEvent>,
     ) -> Result<(), RunError> {
         self.log.step(StepRecord {
@@ -490,9 +491,9 @@ impl<B: HandArm> Attempt<'_, B> {
 
 /// The targets actually sent: the requested ones with the clamp events applied.
 fn applied(
-    targets: &[f64; N_HAND_JOINTS],
+    targets: &[f64; N_JOINTS],
     events: &[crate::hardware::safety::ClampEvent],
-) -> [f64; N_HAND_JOINTS] {
+) -> [f64; N_JOINTS] {
     let mut out = *targets;
     for e in events {
         if let Some(k) = crate::robot::joints::hand_index(&e.joint) {
@@ -534,7 +535,7 @@ impl Controller<'_> {
 
     /// The preshape the plan gives the hand for this controller
     /// ([`PipelineConfig::preshape_angles`] of [`Controller::env_config`]).
-    pub fn preshape(&self, cfg: &PipelineConfig) -> Result<[f64; N_HAND_JOINTS], RunError> {
+    pub fn preshape(&self, cfg: &PipelineConfig) -> Result<[f64; N_JOINTS], RunError> {
         cfg.preshape_angles(&self.env_config())
     }
 }
@@ -581,7 +582,7 @@ pub fn run_attempt_with<B: HandArm>(
         log,
         step: 0,
         clamped: 0,
-        last_sent: [0.0; N_HAND_JOINTS],
+        last_sent: [0.0; N_JOINTS],
     };
     match attempt_body(&mut at, robot, plan, controller, cfg) {
         Ok(mut out) => {
@@ -728,7 +729,7 @@ fn baseline_attempt<B: HandArm>(
 fn baseline_close<B: HandArm>(
     at: &mut Attempt<'_, B>,
     env: &EnvConfig,
-    start: &[f64; N_HAND_JOINTS],
+    start: &[f64; N_JOINTS],
     stop_on_touch: bool,
 ) -> Result<(Mapped, bool, usize), RunError> {
     let n = (env.closing_time / env.closing_period).round().max(1.0) as usize;
@@ -846,7 +847,7 @@ fn stage2<B: HandArm>(
         Modality::M3G => policy.cloud.clone(),
         _ => None,
     };
-    let surface = |q: &[f64; N_HAND_JOINTS]| match &cloud {
+    let surface = |q: &[f64; N_JOINTS]| match &cloud {
         Some(c) => cloud_surface_vectors(robot, &root, q, c),
         None => [0.0; N_SURFACE],
     };
@@ -1016,8 +1017,8 @@ mod tests {
     /// on; it holds the object after any lift.
     struct ScriptedArm {
         t: f64,
-        q: [f64; N_HAND_JOINTS],
-        commands: Vec<[f64; N_HAND_JOINTS]>,
+        q: [f64; N_JOINTS],
+        commands: Vec<[f64; N_JOINTS]>,
         touch_after: usize,
         lifted: bool,
     }
@@ -1032,12 +1033,12 @@ mod tests {
                 stamp: self.t,
                 joint_angles: self.q,
                 tactile_raw,
-                tendon_raw: [0.0; N_TENDONS],
+                tendon_raw: [0.0; N_ACTUATORS],
             })
         }
         fn command_hand(
             &mut self,
-            targets: &[f64; N_HAND_JOINTS],
+            targets: &[f64; N_JOINTS],
         ) -> Result<(), crate::hardware::HwError> {
             self.q = *targets;
             self.commands.push(*targets);
@@ -1067,7 +1068,7 @@ mod tests {
     fn baseline_commands(
         stop_on_touch: bool,
         touch_after: usize,
-    ) -> (Vec<[f64; N_HAND_JOINTS]>, AttemptOutcome) {
+    ) -> (Vec<[f64; N_JOINTS]>, AttemptOutcome) {
         let robot = Robot::builtin(Side::Left);
         let cfg = PipelineConfig {
             safety: SafetyConfig {

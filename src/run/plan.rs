@@ -9,10 +9,10 @@
 
 use super::pipeline::PipelineConfig;
 use super::RunError;
-use crate::hardware::pointcloud::{grasp_candidates, principal_axis_grasp};
-use crate::hardware::N_HAND_JOINTS;
+use crate::perception::pointcloud::{grasp_candidates, principal_axis_grasp};
 use crate::perception::pregrasp::{snap_top_down, PlannedGrasp};
 use crate::robot::grasp_map::{root_pose_for, TwoFingerGrasp};
+use crate::robot::joints::N_JOINTS;
 use crate::robot::{ur10e, Robot};
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -98,7 +98,7 @@ pub struct GraspPlan {
     /// narrowest horizontal extent instead ([`principal_axis_grasp`]).
     pub fallback: bool,
     /// The hand preshape (24 angles, paper order).
-    pub preshape: [f64; N_HAND_JOINTS],
+    pub preshape: [f64; N_JOINTS],
     /// UR10e joints at the pre-grasp pose.
     pub pregrasp_q: [f64; 6],
     /// UR10e joints at the grasp pose.
@@ -281,7 +281,7 @@ pub fn check_cloud(points: &[Point3<f64>]) -> Result<(), RunError> {
 pub fn plan_grasp(
     robot: &Robot,
     source: &GraspSource,
-    preshape: &[f64; N_HAND_JOINTS],
+    preshape: &[f64; N_JOINTS],
     cfg: &PipelineConfig,
 ) -> Result<GraspPlan, RunError> {
     plan_grasp_avoiding(robot, source, preshape, cfg, &[])
@@ -305,7 +305,7 @@ fn already_tried(g: &TwoFingerGrasp, tried: &[GraspPlan]) -> bool {
 pub fn plan_grasp_avoiding(
     robot: &Robot,
     source: &GraspSource,
-    preshape: &[f64; N_HAND_JOINTS],
+    preshape: &[f64; N_JOINTS],
     cfg: &PipelineConfig,
     tried: &[GraspPlan],
 ) -> Result<GraspPlan, RunError> {

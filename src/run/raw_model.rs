@@ -5,7 +5,8 @@
 //! [`super::sim_backend`]'s module docs. Written once for every simulated backend: the
 //! backend supplies the physics, the model the signals.
 
-use crate::hardware::{HwError, RawSensors, N_HAND_JOINTS, N_TACTILE, N_TENDONS};
+use crate::hardware::{HwError, RawSensors};
+use crate::robot::joints::{N_ACTUATORS, N_JOINTS, N_TACTILE};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -102,7 +103,7 @@ impl RawModelConfig {
 pub struct RawModel {
     cfg: RawModelConfig,
     rng: ChaCha8Rng,
-    walk: [f64; N_TENDONS],
+    walk: [f64; N_ACTUATORS],
     walk_time: f64,
 }
 
@@ -113,7 +114,7 @@ impl RawModel {
         cfg.validate()?;
         Ok(RawModel {
             rng: ChaCha8Rng::seed_from_u64(cfg.seed),
-            walk: [0.0; N_TENDONS],
+            walk: [0.0; N_ACTUATORS],
             walk_time: cfg.clock_start_s,
             cfg,
         })
@@ -132,9 +133,9 @@ impl RawModel {
     pub fn reading(
         &mut self,
         t: f64,
-        q: &[f64; N_HAND_JOINTS],
+        q: &[f64; N_JOINTS],
         tip_force: &[f64; N_TACTILE],
-        effort: &[f64; N_TENDONS],
+        effort: &[f64; N_ACTUATORS],
     ) -> RawSensors {
         let raw = &self.cfg;
         let rng = &mut self.rng;
@@ -142,8 +143,7 @@ impl RawModel {
             let z: f64 = StandardNormal.sample(rng);
             sigma * z
         };
-        let joint_angles: [f64; N_HAND_JOINTS] =
-            std::array::from_fn(|k| q[k] + gauss(raw.joint_noise));
+        let joint_angles: [f64; N_JOINTS] = std::array::from_fn(|k| q[k] + gauss(raw.joint_noise));
         let tactile_raw: [f64; N_TACTILE] = std::array::from_fn(|k| {
             raw.tactile_offset[k] + raw.tactile_gain[k] * tip_force[k] + gauss(raw.tactile_noise)
         });
@@ -153,7 +153,7 @@ impl RawModel {
             *w += gauss(walk_sigma);
         }
         self.walk_time = t;
-        let tendon_raw: [f64; N_TENDONS] = std::array::from_fn(|j| {
+        let tendon_raw: [f64; N_ACTUATORS] = std::array::from_fn(|j| {
             raw.tendon_scale * effort[j]
                 + raw.tendon_offset
                 + raw.tendon_drift_rate * t
@@ -197,7 +197,7 @@ mod tests {
             seed: 7,
             ..RawModelConfig::default()
         };
-        let (q, f, e) = ([0.1; N_HAND_JOINTS], [0.0; N_TACTILE], [0.0; N_TENDONS]);
+        let (q, f, e) = ([0.1; N_JOINTS], [0.0; N_TACTILE], [0.0; N_ACTUATORS]);
         let mut a = RawModel::new(cfg.clone()).unwrap();
         let mut b = RawModel::new(cfg).unwrap();
         let (ra, rb) = (a.reading(0.5, &q, &f, &e), b.reading(0.5, &q, &f, &e));

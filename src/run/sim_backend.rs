@@ -41,10 +41,9 @@
 //!   configured height, ramp and hold); a lift of another height is refused. The judgement
 //!   (object held) is reported by [`HandArm::lift_outcome`].
 
-use crate::hardware::pointcloud::CloudError;
-use crate::hardware::{
-    check_duration, ArmMotion, HandArm, HwError, RawSensors, N_HAND_JOINTS, N_TACTILE,
-};
+use crate::hardware::{check_duration, ArmMotion, HandArm, HwError, RawSensors};
+use crate::perception::pointcloud::CloudError;
+use crate::robot::joints::{N_JOINTS, N_TACTILE};
 use crate::robot::{Posture, Robot};
 use crate::sim::settle::Unsettled;
 use crate::sim::{HandSim, LiftOutcome, ObjectSpec, Scene, SimConfig};
@@ -254,7 +253,7 @@ impl HandArm for SimHandArm {
         Ok(r)
     }
 
-    fn command_hand(&mut self, targets: &[f64; N_HAND_JOINTS]) -> Result<(), HwError> {
+    fn command_hand(&mut self, targets: &[f64; N_JOINTS]) -> Result<(), HwError> {
         self.sim.set_targets(targets).map_err(sim_err)
     }
 

@@ -4,8 +4,8 @@
 //! its table of grasps over an object set ([`super::table`]) are written once for every
 //! engine: a backend is one file that implements this trait.
 
-use crate::hardware::pointcloud::CloudError;
 use crate::hardware::{HwError, RawSensors};
+use crate::perception::pointcloud::CloudError;
 use crate::robot::Robot;
 use crate::sim::{FailureReport, LiftOutcome, ObjectSpec, SimConfig};
 use nalgebra::Point3;
