@@ -251,13 +251,13 @@ fn logged_attempt_with_calibrated_observations() {
         let r = arm.read().unwrap();
         let tactile = cal.contacts(&r.tactile_raw);
         let levels = torque.levels(&r.tendon_raw).unwrap();
-        let frame = layout.frame(
-            &prev_action,
-            &tactile,
-            &levels,
-            &r.joint_angles,
-            &[0.0; grasp::env::obs::N_SURFACE],
-        );
+        let sensed = grasp::env::obs::Sensing {
+            tactile,
+            torque_levels: levels,
+            joint_angles: r.joint_angles,
+            surface: [0.0; grasp::env::obs::N_SURFACE],
+        };
+        let frame = layout.frame(&prev_action, &sensed);
         assert_eq!(frame.len(), layout.frame_len());
         let mut targets = r.joint_angles;
         targets[3] += 0.5; // asks for more than the 0.3 rad step

@@ -28,7 +28,7 @@ pub use super::closing::closing_target;
 use super::closing::ClosingPath;
 use super::curriculum::Curriculum;
 use super::object_curriculum::ObjectCurriculum;
-use super::obs::{surface_vectors, FrameStack, Modality, ObsLayout, N_SURFACE};
+use super::obs::{surface_vectors, FrameStack, Modality, ObsLayout, Sensing, N_SURFACE};
 use super::phases::{Phase, PhaseTally};
 use super::reward;
 use super::stream::ObjectStream;
@@ -492,21 +492,28 @@ impl GraspEnv {
         };
         let tactile = s.tactile.map(|b| b == 1);
         let dr = &self.cfg.randomization;
-        let frame = if dr.enabled {
+        let sensed = if dr.enabled {
             let sc = &self.sim.config().sensors;
-            let levels = dr.noisy_levels(
-                &s.effort,
-                sc.torque_scale,
-                &sc.torque_thresholds,
-                &mut self.noise,
-            );
-            let q = dr.noisy_angles(&s.q, &mut self.noise);
-            self.layout
-                .frame(prev_action, &tactile, &levels, &q, &surface)
+            Sensing {
+                tactile,
+                torque_levels: dr.noisy_levels(
+                    &s.effort,
+                    sc.torque_scale,
+                    &sc.torque_thresholds,
+                    &mut self.noise,
+                ),
+                joint_angles: dr.noisy_angles(&s.q, &mut self.noise),
+                surface,
+            }
         } else {
-            self.layout
-                .frame(prev_action, &tactile, &s.torque_level, &s.q, &surface)
+            Sensing {
+                tactile,
+                torque_levels: s.torque_level,
+                joint_angles: s.q,
+                surface,
+            }
         };
+        let frame = self.layout.frame(prev_action, &sensed);
         self.stack.push(frame);
     }
 

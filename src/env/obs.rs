@@ -195,15 +195,9 @@ impl ObsLayout {
         self.len() == 0
     }
 
-    /// Builds one frame from the raw signals.
-    pub fn frame(
-        &self,
-        prev_action: &[f32],
-        tactile: &[bool; N_TACTILE],
-        torque_levels: &[u8; N_TORQUE],
-        joint_angles: &[f64; N_JOINTS],
-        surface: &[f64; N_SURFACE],
-    ) -> Vec<f32> {
+    /// Builds one frame: the previous action `prev_action` (missing values are zeros),
+    /// then what the layout's modality reads of `sensed`.
+    pub fn frame(&self, prev_action: &[f32], sensed: &Sensing) -> Vec<f32> {
         let mut out = Vec::with_capacity(self.frame_len());
         for s in &self.segments {
             match s.kind {
@@ -211,17 +205,40 @@ impl ObsLayout {
                     out.extend((0..s.len).map(|k| prev_action.get(k).copied().unwrap_or(0.0)))
                 }
                 SegmentKind::Tactile => {
-                    out.extend(tactile.iter().map(|&t| if t { 1.0 } else { 0.0 }))
+                    out.extend(sensed.tactile.iter().map(|&t| if t { 1.0 } else { 0.0 }))
                 }
-                SegmentKind::TorqueLevels => {
-                    out.extend(torque_levels.iter().map(|&l| f32::from(l.min(5)) / 5.0))
+                SegmentKind::TorqueLevels => out.extend(
+                    sensed
+                        .torque_levels
+                        .iter()
+                        .map(|&l| f32::from(l.min(5)) / 5.0),
+                ),
+                SegmentKind::JointAngles => {
+                    out.extend(sensed.joint_angles.iter().map(|&a| a as f32))
                 }
-                SegmentKind::JointAngles => out.extend(joint_angles.iter().map(|&a| a as f32)),
-                SegmentKind::Surface => out.extend(surface.iter().map(|&v| v as f32)),
+                SegmentKind::Surface => out.extend(sensed.surface.iter().map(|&v| v as f32)),
             }
         }
         out
     }
+}
+
+/// What the hand senses at one control step, in whichever world it acts: the simulator
+/// fills it in [`crate::env::grasp::GraspEnv`], the robot pipeline from the calibrated
+/// sensors (`crate::run::pipeline`). Every modality's frame is built from it
+/// ([`ObsLayout::frame`]): a new modality is one [`SegmentKind`], one field here and one
+/// producer per world.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sensing {
+    /// `phi`: the fingertip contacts (FF, MF, RF, LF, TH).
+    pub tactile: [bool; N_TACTILE],
+    /// `tau`: the actuators' torque levels 0..5.
+    pub torque_levels: [u8; N_TORQUE],
+    /// `theta`: the joint angles (rad, paper order).
+    pub joint_angles: [f64; N_JOINTS],
+    /// M3G's surface vectors ([`surface_vectors`]); zeros where the modality does not
+    /// read them.
+    pub surface: [f64; N_SURFACE],
 }
 
 /// The privileged simulator state of an asymmetric critic, [`CRITIC_STATE_LEN`] values,
@@ -374,8 +391,13 @@ mod tests {
         lev[0] = 5;
         let mut ang = [0.0; 24];
         ang[23] = 1.5;
-        let sv = [0.0; N_SURFACE];
-        let f = l.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &tact, &lev, &ang, &sv);
+        let mut sensed = Sensing {
+            tactile: tact,
+            torque_levels: lev,
+            joint_angles: ang,
+            surface: [0.0; N_SURFACE],
+        };
+        let f = l.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &sensed);
         assert_eq!(f.len(), 5 + 5 + 20 + 24);
         assert_eq!(&f[..5], &[0.5, -1.0, 0.25, 0.0, 1.0]);
         assert_eq!(&f[5..10], &[0.0, 0.0, 0.0, 0.0, 1.0]);
@@ -383,13 +405,12 @@ mod tests {
         assert_eq!(f[11], 0.6);
         assert_eq!(f[53], 1.5);
         let m1 = ObsLayout::new(Modality::M1, 3, 3);
-        assert_eq!(m1.frame(&[0.0; 5], &tact, &lev, &ang, &sv).len(), 29);
+        assert_eq!(m1.frame(&[0.0; 5], &sensed).len(), 29);
         // M3G: M3's values, then the 18 surface values before the joint angles.
         let g = ObsLayout::new(Modality::M3G, 3, 3);
-        let mut sv = [0.0; N_SURFACE];
-        sv[0] = 0.02;
-        sv[17] = -0.05;
-        let f = g.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &tact, &lev, &ang, &sv);
+        sensed.surface[0] = 0.02;
+        sensed.surface[17] = -0.05;
+        let f = g.frame(&[0.5, -1.0, 0.25, 0.0, 1.0], &sensed);
         assert_eq!(f.len(), 5 + 5 + 20 + 18 + 24);
         assert_eq!((f[30], f[47], f[71]), (0.02, -0.05, 1.5));
         assert_eq!(g.frame_len(), 72);

@@ -28,7 +28,7 @@ use super::RunError;
 use crate::env::action::{clip_unit, component_std, hand_targets, lift_targets, ActionConfig};
 use crate::env::closing::{closing_target, ClosingPath};
 use crate::env::grasp::{Agent, AtMaxSteps, EnvConfig};
-use crate::env::obs::{FrameStack, Modality, ObsLayout, N_SURFACE};
+use crate::env::obs::{FrameStack, Modality, ObsLayout, Sensing, N_SURFACE};
 use crate::eval::PolicyAgent;
 use crate::hardware::calibration::TactileCalibration;
 use crate::hardware::log::{AttemptLog, OutcomeRecord, StepRecord};
@@ -847,17 +847,18 @@ fn stage2<B: HandArm>(
         Modality::M3G => policy.cloud.clone(),
         _ => None,
     };
-    let surface = |q: &[f64; N_JOINTS]| match &cloud {
-        Some(c) => cloud_surface_vectors(robot, &root, q, c),
-        None => [0.0; N_SURFACE],
+    // What the hand senses, from the calibrated sensors (the simulator's counterpart is
+    // in env::grasp).
+    let sensed = |m: &Mapped| Sensing {
+        tactile: m.tactile,
+        torque_levels: m.levels,
+        joint_angles: m.raw.joint_angles,
+        surface: match &cloud {
+            Some(c) => cloud_surface_vectors(robot, &root, &m.raw.joint_angles, c),
+            None => [0.0; N_SURFACE],
+        },
     };
-    stack.push(policy.layout.frame(
-        &vec![0.0; n_cont],
-        &m.tactile,
-        &m.levels,
-        &m.raw.joint_angles,
-        &surface(&m.raw.joint_angles),
-    ));
+    stack.push(policy.layout.frame(&vec![0.0; n_cont], &sensed(&m)));
     let mut steps = 0;
     let mut lifted = false;
     while steps < env.max_steps {
@@ -885,13 +886,7 @@ fn stage2<B: HandArm>(
         );
         m = at.command(&targets, logged, cfg.control_period_s)?;
         let prev: Vec<f32> = a.cont.iter().map(|&x| clip_unit(x) as f32).collect();
-        stack.push(policy.layout.frame(
-            &prev,
-            &m.tactile,
-            &m.levels,
-            &m.raw.joint_angles,
-            &surface(&m.raw.joint_angles),
-        ));
+        stack.push(policy.layout.frame(&prev, &sensed(&m)));
     }
     Ok((m, steps, lifted))
 }
