@@ -9,20 +9,18 @@
 //! ```
 //!
 //! The file names live in [`files`], the training config's schema in [`config`]. A
-//! checkpoint's setup ([`checkpoint_setup`]) is its grasping MDP, synergy components,
-//! synergy model and simulator config; [`CheckpointSetup::sim_config`] reads the latter by
-//! [`SimConfig::load_or_default`]'s one rule.
+//! checkpoint's setup ([`checkpoint_setup`]) is its grasping MDP, synergy components and
+//! simulator config file. [`TrainedAgent`] is the one loader of a
+//! trained agent: weights, setup and synergy model, checked to fit.
 
+pub mod agent;
 pub mod config;
 pub mod files;
 
+pub use agent::{Assumed, TrainedAgent};
 pub use config::{EnvKind, TrainConfig, TrainConfigError, TrainEnvConfig};
 
 use crate::env::grasp::EnvConfig;
-use crate::env::obs::Modality;
-use crate::sim::config::SimConfigError;
-use crate::sim::SimConfig;
-use crate::synergy::SynergyModel;
 use std::path::{Path, PathBuf};
 
 /// The latest checkpoint folder of run folder `dir`.
@@ -81,72 +79,8 @@ pub struct CheckpointSetup {
     pub env: EnvConfig,
     /// Synergy components the policy acts in.
     pub n_components: usize,
-    /// The synergy model saved beside the checkpoint (`synergy.json`), when present.
-    pub synergy: Option<PathBuf>,
     /// The simulator config file the run was trained with (`None`: the built-in one).
     pub sim_config: Option<PathBuf>,
-}
-
-impl CheckpointSetup {
-    /// The synergy model the policy acts in: the one beside the checkpoint, else the
-    /// shipped model, with `n_components` components.
-    pub fn synergy_model(&self) -> Result<SynergyModel, CheckpointError> {
-        let model = match &self.synergy {
-            Some(p) => SynergyModel::load(p).map_err(|e| CheckpointError {
-                path: p.clone(),
-                message: e.to_string(),
-            })?,
-            None => {
-                tracing::warn!(
-                    "a checkpoint without synergy.json: its policy acts in the shipped \
-                     synergy model"
-                );
-                crate::synergy::default_model()
-            }
-        };
-        model
-            .truncated(self.n_components)
-            .map_err(|e| CheckpointError {
-                path: self.synergy.clone().unwrap_or_default(),
-                message: e.to_string(),
-            })
-    }
-
-    /// The simulator config the run was trained with, by
-    /// [`SimConfig::load_or_default`]'s rule.
-    pub fn sim_config(&self) -> Result<SimConfig, SimConfigError> {
-        SimConfig::load_or_default(self.sim_config.as_deref())
-    }
-
-    /// Checks the user's `--modality` / `--components` against the checkpoint: a value
-    /// that differs is an error naming both.
-    pub fn check_flags(
-        &self,
-        dir: &Path,
-        modality: Option<Modality>,
-        components: Option<usize>,
-    ) -> Result<(), CheckpointError> {
-        if let Some(m) = modality.filter(|m| *m != self.env.modality) {
-            return Err(CheckpointError {
-                path: dir.join(files::CONFIG),
-                message: format!(
-                    "the checkpoint was trained with modality {:?}, not {m:?}: drop --modality",
-                    self.env.modality
-                ),
-            });
-        }
-        if let Some(n) = components.filter(|n| *n != self.n_components) {
-            return Err(CheckpointError {
-                path: dir.join(files::CONFIG),
-                message: format!(
-                    "the checkpoint was trained with {} synergy components, not {n}: drop \
-                     --components",
-                    self.n_components
-                ),
-            });
-        }
-        Ok(())
-    }
 }
 
 /// Reads the training config beside the checkpoint in `dir`. `Ok(None)` when the folder
@@ -166,7 +100,6 @@ pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, Checkpoin
             ),
         });
     }
-    let synergy = dir.join(files::SYNERGY);
     let mut env = cfg.env.grasp;
     // Every agent is judged on the same, unrandomised objects and sensors, each object
     // in turn.
@@ -177,7 +110,6 @@ pub fn checkpoint_setup(dir: &Path) -> Result<Option<CheckpointSetup>, Checkpoin
     Ok(Some(CheckpointSetup {
         env,
         n_components: cfg.n_components,
-        synergy: synergy.is_file().then_some(synergy),
         sim_config: cfg.sim_config,
     }))
 }

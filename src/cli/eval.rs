@@ -2,8 +2,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use grasp::checkpoint::checkpoint_setup;
-use grasp::env::api::Env;
+use grasp::checkpoint::{Assumed, TrainedAgent};
 use grasp::env::curriculum::CurriculumConfig;
 use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
@@ -13,8 +12,8 @@ use grasp::eval::rank::MAX_RANK_TOP;
 use grasp::eval::record::{agent_file_name, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
-    read_results, text_table, unpaired_lines, AgentResult, AgentSpec, PregraspStats, RankStats,
-    RankedPregrasp, TrialPlan,
+    read_results, text_table, unpaired_lines, AgentResult, AgentSpec, EvalAgent, PregraspStats,
+    RankStats, RankedPregrasp, TrialPlan,
 };
 use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
@@ -196,6 +195,8 @@ struct AgentEnv {
     /// The simulator config the checkpoint was trained with (`None` for baselines and
     /// checkpoints without a config.toml); `Some(None)`: the built-in one.
     trained_sim: Option<Option<PathBuf>>,
+    /// A checkpoint's loaded network.
+    network: Option<Arc<grasp::ppo::LoadedPolicy>>,
 }
 
 /// The simulator config every agent is evaluated in: `--sim-config` (with a warning for
@@ -273,81 +274,83 @@ fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> R
     })
 }
 
-/// Resolves each agent's environment: checkpoints from their own config.toml, baselines
-/// (and checkpoints without one) from the flags.
+/// Resolves each agent's environment: checkpoints from their own config.toml
+/// ([`TrainedAgent`]), baselines (and checkpoints without one) from the flags.
 fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<AgentEnv>> {
-    let curriculum = CurriculumConfig {
-        enabled: false,
-        fixed_rate: a.difficulty,
-        ..CurriculumConfig::default()
-    };
     let flag_env = EnvConfig {
         modality: a.modality.unwrap_or(Modality::M3),
-        curriculum: curriculum.clone(),
         ..EnvConfig::default()
     };
     let flag_components = a.components.unwrap_or(5);
-    let flag_model = || load_synergy(a.synergy.as_ref(), flag_components);
+    let warn = |m: String| {
+        if !g.quiet {
+            eprintln!("warning: {m}");
+        }
+    };
     specs
         .into_iter()
         .map(|spec| {
             let Some(dir) = spec.checkpoint() else {
+                let mut env = flag_env.clone();
+                env.curriculum = fixed_difficulty(a.difficulty);
                 return Ok(AgentEnv {
                     spec,
-                    env: flag_env.clone(),
-                    model: flag_model()?,
+                    env,
+                    model: load_synergy(a.synergy.as_ref(), flag_components)?,
                     trained_sim: None,
+                    network: None,
                 });
             };
-            let setup = checkpoint_setup(dir)
-                .with_context(|| format!("reading the setup of checkpoint {}", dir.display()))?;
-            let Some(setup) = setup else {
-                if !g.quiet {
-                    eprintln!(
-                        "warning: {} has no config.toml; using --modality/--components",
-                        dir.display()
-                    );
-                }
-                return Ok(AgentEnv {
-                    spec,
-                    env: flag_env.clone(),
-                    model: flag_model()?,
-                    trained_sim: None,
-                });
+            let assumed = Assumed {
+                env: Some(flag_env.clone()),
+                n_components: Some(flag_components),
+                synergy: a.synergy.clone(),
             };
-            setup.check_flags(dir, a.modality, a.components)?;
-            if a.synergy.is_some() && setup.synergy.is_some() && !g.quiet {
-                eprintln!(
-                    "warning: {} uses the synergy.json saved beside it, not --synergy",
+            let mut agent = TrainedAgent::load_assuming(dir, &assumed)
+                .with_context(|| format!("loading checkpoint {}", dir.display()))?;
+            if !agent.has_config() {
+                warn(format!(
+                    "{} has no config.toml; using --modality/--components",
                     dir.display()
-                );
+                ));
             }
-            let model = if setup.synergy.is_some() {
-                setup.synergy_model()?
-            } else {
-                if !g.quiet {
-                    eprintln!(
-                        "warning: {} has no synergy.json; its policy acts in {}",
-                        dir.display(),
-                        a.synergy.as_ref().map_or_else(
-                            || "the shipped synergy model (assets/synergy/model.json)".to_string(),
-                            |p| format!("--synergy {}", p.display())
-                        )
-                    );
+            agent.check_flags(a.modality, a.components)?;
+            if agent.has_synergy_file() {
+                if a.synergy.is_some() && agent.has_config() {
+                    warn(format!(
+                        "{} uses the synergy.json saved beside it, not --synergy",
+                        dir.display()
+                    ));
                 }
-                load_synergy(a.synergy.as_ref(), setup.n_components)?
-            };
+            } else if agent.has_config() {
+                warn(format!(
+                    "{} has no synergy.json; its policy acts in {}",
+                    dir.display(),
+                    a.synergy.as_ref().map_or_else(
+                        || "the shipped synergy model (assets/synergy/model.json)".to_string(),
+                        |p| format!("--synergy {}", p.display())
+                    )
+                ));
+            }
+            agent.at_difficulty(a.difficulty);
             Ok(AgentEnv {
-                env: EnvConfig {
-                    curriculum: curriculum.clone(),
-                    ..setup.env
-                },
+                env: agent.env.clone(),
+                model: agent.synergy().clone(),
+                trained_sim: agent.trained_sim_path().map(|p| p.map(Path::to_path_buf)),
+                network: Some(agent.network().clone()),
                 spec,
-                model,
-                trained_sim: Some(setup.sim_config),
             })
         })
         .collect()
+}
+
+/// The curriculum of an evaluation: off, at `difficulty`.
+fn fixed_difficulty(difficulty: f64) -> CurriculumConfig {
+    CurriculumConfig {
+        enabled: false,
+        fixed_rate: difficulty,
+        ..CurriculumConfig::default()
+    }
 }
 
 pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
@@ -660,25 +663,6 @@ fn recording_names(
     Ok(rec_names)
 }
 
-/// The checkpoint in `dir` must match the observation layout it will see (`probe`: an
-/// environment built for the agent).
-fn check_obs_layout(dir: &Path, ag: &AgentEnv, probe: &GraspEnv) -> Result<()> {
-    let p = grasp::ppo::load_policy(dir)
-        .with_context(|| format!("loading checkpoint {}", dir.display()))?;
-    if p.policy.obs_dim() != probe.obs_dim() {
-        bail!(
-            "checkpoint {} expects observations of length {}, but {:?} with {} components and history {} gives {}",
-            dir.display(),
-            p.policy.obs_dim(),
-            ag.env.modality,
-            ag.model.n_components(),
-            ag.env.history,
-            probe.obs_dim()
-        );
-    }
-    Ok(())
-}
-
 /// The critic that ranks the planner's placements (`--rank-top` above 1): its
 /// checkpoint, network and setup.
 struct Ranker {
@@ -724,13 +708,8 @@ fn ranker(
     if let Some(c) = conditions {
         c.apply(&mut env.env);
     }
-    let critic = grasp::ppo::load_policy(&dir)
-        .with_context(|| format!("loading the ranker {}", dir.display()))?;
-    Ok(Some(Ranker {
-        dir,
-        critic: Arc::new(critic),
-        env,
-    }))
+    let critic = env.network.clone().context("the ranker's network")?;
+    Ok(Some(Ranker { dir, critic, env }))
 }
 
 /// How a checkpoint's grip and lift act, for the progress line: "" with neither a grip
@@ -800,9 +779,6 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
         )
     };
     let ranker = ranker(a, &agents, conditions.as_ref(), g)?;
-    if let Some(r) = &ranker {
-        check_obs_layout(&r.dir, &r.env, &env_on(&r.env, 0)?)?;
-    }
     let record = a.rec.record.as_ref().map(|dir| RecordOptions {
         dir: dir.clone(),
         every: a.rec.record_every,
@@ -845,9 +821,6 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
                 })),
             })
         };
-        if let Some(dir) = ag.spec.checkpoint() {
-            check_obs_layout(dir, ag, &make_env(0)?)?;
-        }
         if !g.quiet {
             eprintln!(
                 "evaluating {}{} on {} objects x {} trials ...",
@@ -869,7 +842,10 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             },
             n_threads,
             &make_env,
-            &ag.spec,
+            EvalAgent {
+                spec: &ag.spec,
+                network: ag.network.as_ref(),
+            },
             record.as_ref(),
             Some(&signal::STOP),
         )?);

@@ -7,13 +7,14 @@ use crate::ppo::LoadedPolicy;
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use std::path::Path;
+use std::sync::Arc;
 
 /// A learned policy acting in the grasping MDP: observations are normalised as in
 /// training, the GRU state is carried across steps and reset at episode starts. Actions
 /// are the distribution's mode (deterministic) unless `stochastic`, then sampled from a
 /// seeded RNG.
 pub struct PolicyAgent {
-    policy: LoadedPolicy,
+    policy: Arc<LoadedPolicy>,
     hidden: Option<Tensor>,
     first: bool,
     stochastic: bool,
@@ -21,8 +22,8 @@ pub struct PolicyAgent {
 }
 
 impl PolicyAgent {
-    /// Wraps a loaded checkpoint.
-    pub fn new(policy: LoadedPolicy, stochastic: bool, seed: u64) -> Self {
+    /// Wraps a loaded checkpoint's network ([`crate::checkpoint::TrainedAgent::network`]).
+    pub fn new(policy: Arc<LoadedPolicy>, stochastic: bool, seed: u64) -> Self {
         PolicyAgent {
             policy,
             hidden: None,
@@ -94,6 +95,17 @@ impl Agent for PolicyAgent {
             }
         })
     }
+}
+
+/// An agent as an evaluation runs it: which one ([`AgentSpec`]) and, for a checkpoint,
+/// its loaded network ([`TrainedAgent::network`](crate::checkpoint::TrainedAgent::network)),
+/// which every worker of the evaluation shares.
+#[derive(Clone, Copy)]
+pub struct EvalAgent<'a> {
+    /// Which agent.
+    pub spec: &'a AgentSpec,
+    /// A checkpoint's network (`None` for the baselines).
+    pub network: Option<&'a Arc<LoadedPolicy>>,
 }
 
 /// Which agent an evaluation runs.

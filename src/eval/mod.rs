@@ -3,8 +3,9 @@
 //! layout of the paper's Table I.
 //!
 //! - [`evaluate`]: one agent on every object of a set, trials seeded per (object, trial);
-//! - [`checkpoint_setup`](crate::checkpoint::checkpoint_setup): the environment a checkpoint was trained in, read from the
-//!   `config.toml` saved beside it, so evaluations observe what the policy expects;
+//! - [`TrainedAgent`](crate::checkpoint::TrainedAgent): a checkpoint loaded with the
+//!   environment it was trained in (the `config.toml` saved beside it), so evaluations
+//!   observe what the policy expects;
 //! - [`paired`](mod@paired): two agents compared trial by trial (exact McNemar test);
 //! - [`record`]: episode recordings (JSON and a self-contained 3D replay page);
 //! - [`plot`]: Table I as a picture, per-object success of the agents side by side;
@@ -29,7 +30,7 @@ mod agent;
 mod results;
 mod tables;
 
-pub use agent::{policy_step, AgentSpec, PolicyAgent};
+pub use agent::{policy_step, AgentSpec, EvalAgent, PolicyAgent};
 pub use paired::{paired, paired_lines, paired_with_first, unpaired_lines, Paired};
 pub use results::{
     over_1cm_by_body, physics_line, read_results, saved_agent_name, select_agents, AgentResult,
@@ -102,10 +103,10 @@ pub fn evaluate(
     plan: &TrialPlan,
     threads: usize,
     make_env: &(dyn Fn(usize) -> Result<GraspEnv, GraspEnvError> + Sync),
-    spec: &AgentSpec,
+    agent: EvalAgent<'_>,
     record: Option<&RecordOptions>,
 ) -> Result<AgentResult, EvalError> {
-    evaluate_until(names, plan, threads, make_env, spec, record, None)
+    evaluate_until(names, plan, threads, make_env, agent, record, None)
 }
 
 /// [`evaluate`] that stops starting trials once `stop` is set (a signal): the trials in
@@ -117,10 +118,11 @@ pub fn evaluate_until(
     plan: &TrialPlan,
     threads: usize,
     make_env: &(dyn Fn(usize) -> Result<GraspEnv, GraspEnvError> + Sync),
-    spec: &AgentSpec,
+    agent: EvalAgent<'_>,
     record: Option<&RecordOptions>,
     stop: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<AgentResult, EvalError> {
+    let EvalAgent { spec, network } = agent;
     let stopped = || stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
     let TrialPlan {
         trials,
@@ -147,8 +149,12 @@ pub fn evaluate_until(
                 let mut env = make_env(o)?;
                 let mut agent: Option<PolicyAgent> = match spec.checkpoint() {
                     Some(dir) => Some(PolicyAgent::new(
-                        crate::ppo::load_policy(dir)
-                            .map_err(|e| EvalError::Agent(format!("{}: {e}", dir.display())))?,
+                        network.cloned().ok_or_else(|| {
+                            EvalError::Agent(format!(
+                                "{}: a checkpoint agent is evaluated with its loaded network",
+                                dir.display()
+                            ))
+                        })?,
                         matches!(spec, AgentSpec::Sampled(_)),
                         // A stream of its own per object, apart from every trial's seed.
                         trial_seed(seed, &names[o], trials),

@@ -11,7 +11,7 @@
 //! than the dev profile `.ci/run` uses (32 against 22.5 steps/s on the reference machine),
 //! so across profiles only the counts are compared.
 
-use super::{evaluate, AgentSpec, EvalError, TrialPlan};
+use super::{evaluate, AgentSpec, EvalAgent, EvalError, TrialPlan};
 use crate::env::api::{Env, VecEnv};
 use crate::env::bench::{random_agent, Until};
 use crate::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
@@ -203,13 +203,14 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
     let baseline_model = crate::synergy::default_model()
         .truncated(5)
         .map_err(|e| EvalError::Agent(e.to_string()))?;
-    let ck = crate::checkpoint::checkpoint_setup(&setup.policy)?.ok_or_else(|| {
-        EvalError::Checkpoint {
+    let mut agent = crate::checkpoint::TrainedAgent::load(&setup.policy)?;
+    if !agent.has_config() {
+        return Err(EvalError::Checkpoint {
             path: setup.policy.join(crate::checkpoint::files::CONFIG),
             message: "missing: the regression policy must be a `grasp train` checkpoint".into(),
-        }
-    })?;
-    let policy_model = ck.synergy_model()?;
+        });
+    }
+    agent.at_difficulty(1.0);
     let runs: [(AgentSpec, String, EnvConfig, &SynergyModel); 2] = [
         (
             AgentSpec::Baseline2,
@@ -223,8 +224,8 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
                 .policy
                 .file_name()
                 .map_or_else(|| "policy".into(), |n| n.to_string_lossy().into_owned()),
-            fixed(ck.env.clone()),
-            &policy_model,
+            agent.env.clone(),
+            agent.synergy(),
         ),
     ];
     let mut agents = Vec::new();
@@ -243,7 +244,10 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
             &TrialPlan::once(setup.trials, setup.seed),
             setup.threads,
             &make_env,
-            &spec,
+            EvalAgent {
+                spec: &spec,
+                network: spec.checkpoint().map(|_| agent.network()),
+            },
             None,
         )?;
         agents.push(AgentFigure {

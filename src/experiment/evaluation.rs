@@ -18,16 +18,13 @@
 //! others) while the settings and the checkpoint match.
 
 use super::{io_err, run_state, ExperimentError, Plan, PlannedRun, RunState};
-use crate::checkpoint::checkpoint_setup;
+use crate::checkpoint::TrainedAgent;
 use crate::checkpoint::{files, latest_dir};
-use crate::env::curriculum::CurriculumConfig;
-use crate::env::grasp::{EnvConfig, GraspEnv};
 use crate::eval::conditions::EvalConditions;
 use crate::eval::paired::{mcnemar_exact, p_text};
-use crate::eval::{evaluate, wilson, AgentSpec, TrialPlan};
+use crate::eval::{evaluate, wilson, AgentSpec, EvalAgent, TrialPlan};
 use crate::perception::pregrasp::AntipodalPregrasp;
 use crate::robot::{Robot, Side};
-use crate::sim::SimConfig;
 use crate::util::fsx::write_atomic;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::path::{Path, PathBuf};
@@ -265,32 +262,23 @@ pub fn evaluate_runs(
                 dir: r.dir.clone(),
                 source,
             };
-            let setup = checkpoint_setup(&ck)
-                .map_err(|e| eval_err(e.into()))?
-                .ok_or_else(|| io_err(&ck.join(files::CONFIG), "missing"))?;
-            let model = setup.synergy_model().map_err(|e| eval_err(e.into()))?;
-            let sim_path = plan.variants[r.variant].config.sim_config.as_deref();
-            let sim = SimConfig::load_or_default(sim_path)
-                .map_err(|e| io_err(sim_path.unwrap_or(Path::new("")), e))?;
-            let mut env_cfg = EnvConfig {
-                curriculum: CurriculumConfig {
-                    enabled: false,
-                    fixed_rate: e.difficulty,
-                    ..CurriculumConfig::default()
-                },
-                ..setup.env.clone()
-            };
+            let mut agent = TrainedAgent::load(&ck).map_err(|e| eval_err(e.into()))?;
+            if !agent.has_config() {
+                return Err(io_err(&ck.join(files::CONFIG), "missing"));
+            }
+            // The physics the run was trained in, as its checkpoint records it.
+            let sim = agent.trained_sim().map_err(|e| {
+                io_err(
+                    agent.trained_sim_path().flatten().unwrap_or(Path::new("")),
+                    e,
+                )
+            })?;
+            agent.at_difficulty(e.difficulty);
             if let Some(c) = &conditions {
-                c.apply(&mut env_cfg);
+                c.apply(&mut agent.env);
             }
             let make_env = |o: usize| {
-                let env = GraspEnv::new(
-                    &robot,
-                    vec![objects[o].clone()],
-                    model.clone(),
-                    sim.clone(),
-                    env_cfg.clone(),
-                )?;
+                let env = agent.environment(&robot, objects[o].clone(), sim.clone())?;
                 Ok(match e.pregrasp {
                     EvalPlacement::TopDown => env,
                     EvalPlacement::Antipodal => {
@@ -307,7 +295,10 @@ pub fn evaluate_runs(
                 &TrialPlan::once(e.trials, seed),
                 threads,
                 &make_env,
-                &AgentSpec::learned(ck.clone(), e.stochastic),
+                EvalAgent {
+                    spec: &AgentSpec::learned(ck.clone(), e.stochastic),
+                    network: Some(agent.network()),
+                },
                 None,
             )
             .map_err(eval_err)?;

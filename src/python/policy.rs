@@ -4,7 +4,7 @@
 
 use super::actions::f32_bytes;
 use super::error::{locked, no_panic};
-use crate::checkpoint::checkpoint_setup;
+use crate::checkpoint::TrainedAgent;
 use crate::env::grasp::Agent;
 use crate::eval::PolicyAgent;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -55,14 +55,13 @@ pub const SHIPPED_DIR: &str = "assets/policies/fig5_gru_m3_pca8";
 
 impl CorePolicy {
     fn load(dir: PathBuf, stochastic: bool, seed: u64) -> PyResult<Self> {
-        let loaded = no_panic("loading the checkpoint", || crate::ppo::load_policy(&dir))?
-            .map_err(|e| PyValueError::new_err(format!("checkpoint {}: {e}", dir.display())))?;
-        checkpoint_setup(&dir).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let trained = no_panic("loading the checkpoint", || TrainedAgent::load(&dir))?
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let config_path = dir.join(crate::checkpoint::files::CONFIG);
         let config_toml = std::fs::read_to_string(&config_path).map_err(|e| {
             PyValueError::new_err(format!("cannot read {}: {e}", config_path.display()))
         })?;
-        let agent = PolicyAgent::new(loaded, stochastic, seed);
+        let agent = PolicyAgent::new(trained.network().clone(), stochastic, seed);
         let (obs_dim, continuous) = agent.dims();
         Ok(CorePolicy {
             agent: Mutex::new(agent),

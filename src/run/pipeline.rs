@@ -25,6 +25,7 @@
 //! attempt ends with an outcome line, also when it fails with an error.
 
 use super::RunError;
+use crate::checkpoint::TrainedAgent;
 use crate::env::action::{clip_unit, component_std, hand_targets, lift_targets, ActionConfig};
 use crate::env::closing::{closing_target, ClosingPath};
 use crate::env::grasp::{Agent, AtMaxSteps, EnvConfig};
@@ -278,75 +279,36 @@ impl PolicyRunner {
         self.cloud = cloud;
     }
 
-    /// Loads the checkpoint folder `dir` (`checkpoint.safetensors`, and beside it the
-    /// `config.toml` of its training run and its `synergy.json`; without them the
-    /// environment defaults and the shipped synergy model are used). The policy acts
-    /// deterministically (the mode of its distribution).
+    /// Loads the checkpoint folder `dir` ([`TrainedAgent::load`]: `checkpoint.safetensors`,
+    /// and beside it the `config.toml` of its training run and its `synergy.json`;
+    /// without them the environment defaults and the shipped synergy model are used).
+    /// The policy acts deterministically (the mode of its distribution).
     pub fn load(dir: &Path) -> Result<PolicyRunner, RunError> {
-        let perr = |detail: String| RunError::Policy {
+        let trained = TrainedAgent::load(dir).map_err(|e| RunError::Policy {
             path: dir.to_path_buf(),
-            detail,
-        };
-        if !dir.is_dir() {
-            return Err(perr("not a checkpoint folder (does not exist)".into()));
-        }
-        let loaded = crate::ppo::load_policy(dir).map_err(|e| perr(e.to_string()))?;
-        let spec = loaded.policy.action_spec();
-        if !spec.lift || spec.continuous < 3 {
-            return Err(perr(format!(
-                "not a grasping policy: {} continuous actions, lift {}",
-                spec.continuous, spec.lift
-            )));
-        }
-        let saved = crate::checkpoint::saved_config(dir).map_err(|e| perr(e.message))?;
-        let (env, n) = if let Some(c) = saved {
-            // n synergies, the wrist's two increments and, with the grip, one more.
-            let n = c.n_components;
-            let expected = c.env.grasp.action.continuous(n);
-            if spec.continuous != expected {
-                return Err(perr(format!(
-                    "config.toml says {n} synergy components{} ({expected} continuous actions) but the network acts in {}",
-                    if c.env.grasp.action.grip_scale > 0.0 { " and a grip" } else { "" },
-                    spec.continuous
-                )));
-            }
-            (c.env.grasp, n)
-        } else {
-            (EnvConfig::default(), spec.continuous - 2)
-        };
-        env.validate().map_err(|e| perr(e.to_string()))?;
-        let syn_path = dir.join(crate::checkpoint::files::SYNERGY);
-        let full = if syn_path.is_file() {
-            SynergyModel::load(&syn_path).map_err(|e| perr(e.to_string()))?
-        } else {
+            detail: e.message,
+        })?;
+        if !trained.has_synergy_file() {
             tracing::warn!(
                 "checkpoint {} has no synergy.json: its policy acts in the shipped synergy model",
                 dir.display()
             );
-            crate::synergy::default_model()
-        };
-        let synergy = full.truncated(n).map_err(|e| perr(e.to_string()))?;
-        // A policy trained with an asymmetric critic reads the same frames; its critic's
-        // privileged values are zeros here (the actor never reads them).
-        let layout = env.layout(n);
-        if layout.len() != loaded.policy.obs_dim() {
-            return Err(perr(format!(
-                "the network expects observations of length {}, but {:?} with {n} components and history {} gives {}",
-                loaded.policy.obs_dim(),
-                env.modality,
-                env.history,
-                layout.len()
-            )));
         }
-        Ok(PolicyRunner {
-            agent: PolicyAgent::new(loaded, false, 0),
+        Ok(PolicyRunner::new(&trained))
+    }
+
+    /// The runner of a loaded agent, acting deterministically.
+    pub fn new(trained: &TrainedAgent) -> PolicyRunner {
+        let synergy = trained.synergy().clone();
+        PolicyRunner {
+            agent: PolicyAgent::new(trained.network().clone(), false, 0),
             eps_std: component_std(&synergy),
+            layout: trained.env.layout(synergy.n_components()),
             synergy,
-            env,
-            layout,
-            dir: dir.to_path_buf(),
+            env: trained.env.clone(),
+            dir: trained.dir().to_path_buf(),
             cloud: None,
-        })
+        }
     }
 
     /// The environment config the policy was trained in.
