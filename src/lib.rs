@@ -22,8 +22,9 @@
 //! - [`policy`]: GRU and MLP actor-critics on candle and their action distribution.
 //! - [`ppo`]: the PPO learner: rollouts, GAE, losses, checkpoints.
 //! - [`checkpoint`]: the checkpoint folder: its file names, the training config's schema
-//!   and a checkpoint's setup (MDP, synergy model, simulator config), read back by
-//!   evaluation, `grasp run`, experiments and the Python module.
+//!   and [`checkpoint::TrainedAgent`], the one loader of a trained agent (weights, MDP,
+//!   synergy model, simulator config) for evaluation, `grasp run`, experiments, the
+//!   regression check and the Python module.
 //! - [`train`]: training runs (`grasp train` as a library): the run folder, metrics,
 //!   TensorBoard events, the learning-curve plot and the environments of a config.
 //! - [`run`]: grasp attempts on a hand-arm system: the simulator behind the hardware

@@ -6,7 +6,7 @@
 //!   Python-side overrides (objects, environments, threads, seed, difficulty).
 //! - [`actions`]: flat `float32` action buffers decoded into [`crate::env::api::Action`]s,
 //!   with errors naming the bad component.
-//! - [`env`]: one grasping environment (gymnasium.Env) and the scripted baselines.
+//! - [`env`](mod@env): one grasping environment (gymnasium.Env) and the scripted baselines.
 //! - [`vec_env`]: the rayon [`crate::env::api::VecEnv`] of a config (gymnasium VectorEnv).
 //! - [`policy`]: a trained checkpoint acting on observations.
 //! - [`error`]: library errors as Python exceptions.

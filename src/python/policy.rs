@@ -10,7 +10,7 @@ use crate::eval::PolicyAgent;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 /// A checkpoint folder's policy (`checkpoint.safetensors`, with the `config.toml` and
@@ -33,25 +33,29 @@ pub struct CorePolicy {
     dir: PathBuf,
 }
 
-/// The shipped policy (`assets/policies/fig5_gru_m3_pca8/`), embedded: the files a
-/// checkpoint folder needs.
+/// The shipped policy, `grasp run`'s default ([`crate::run::DEFAULT_POLICY`]), embedded:
+/// the files a checkpoint folder needs.
 const SHIPPED: [(&str, &[u8]); 3] = [
     (
         "checkpoint.safetensors",
-        include_bytes!("../../assets/policies/fig5_gru_m3_pca8/checkpoint.safetensors"),
+        include_bytes!(concat!(
+            "../../",
+            crate::default_policy!(),
+            "/checkpoint.safetensors"
+        )),
     ),
     (
         "config.toml",
-        include_bytes!("../../assets/policies/fig5_gru_m3_pca8/config.toml"),
+        include_bytes!(concat!("../../", crate::default_policy!(), "/config.toml")),
     ),
     (
         "synergy.json",
-        include_bytes!("../../assets/policies/fig5_gru_m3_pca8/synergy.json"),
+        include_bytes!(concat!("../../", crate::default_policy!(), "/synergy.json")),
     ),
 ];
 
 /// The shipped policy's folder in the repository.
-pub const SHIPPED_DIR: &str = "assets/policies/fig5_gru_m3_pca8";
+pub const SHIPPED_DIR: &str = crate::run::DEFAULT_POLICY;
 
 impl CorePolicy {
     fn load(dir: PathBuf, stochastic: bool, seed: u64) -> PyResult<Self> {
@@ -83,14 +87,17 @@ impl CorePolicy {
         Self::load(dir, stochastic, seed)
     }
 
-    /// The shipped policy (assets/policies/fig5_gru_m3_pca8, embedded in the module),
+    /// The shipped policy (`grasp run`'s default, embedded in the module),
     /// unpacked into a temporary folder that is removed once it is loaded.
     #[staticmethod]
     #[pyo3(signature = (stochastic=false, seed=0))]
     fn shipped(stochastic: bool, seed: u64) -> PyResult<Self> {
         let tmp = tempfile::tempdir()
             .map_err(|e| PyRuntimeError::new_err(format!("temporary folder: {e}")))?;
-        let dir = tmp.path().join("fig5_gru_m3_pca8");
+        let name = Path::new(SHIPPED_DIR)
+            .file_name()
+            .ok_or_else(|| PyRuntimeError::new_err("the shipped policy's folder has no name"))?;
+        let dir = tmp.path().join(name);
         for (name, bytes) in SHIPPED {
             crate::util::fsx::write_atomic(&dir.join(name), bytes)
                 .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;

@@ -24,12 +24,22 @@
 
 pub mod calibrate;
 
+/// [`DEFAULT_POLICY`] as a literal, for `include_bytes!` (the Python module embeds it).
+#[macro_export]
+#[doc(hidden)]
+macro_rules! default_policy {
+    () => {
+        "assets/policies/fig5_gru_m3_pca8"
+    };
+}
+
 /// The policy `grasp run` acts with unless `--policy` names another: the shipped policy
 /// with the most successes from the pre-grasp `grasp run` plans on the validation set and
 /// its real slice (the rule and its measurement: docs/robot-hardware.md, "The default
 /// policy"); Python's `grasp_rl.Policy.shipped()` embeds the same one. A path relative to
 /// the repository, found from any working directory by [`crate::util::assets::shipped`].
-pub const DEFAULT_POLICY: &str = "assets/policies/fig5_gru_m3_pca8";
+pub const DEFAULT_POLICY: &str = default_policy!();
+
 pub mod mjcf;
 #[cfg(feature = "mujoco")]
 pub mod mujoco_backend;

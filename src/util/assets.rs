@@ -1,7 +1,7 @@
 //! Where a default that names a shipped file lies, from any working directory.
 //!
-//! A command-line default such as `grasp run`'s `--policy
-//! assets/policies/grip_long_gru_m3_pca5` is a path relative to the repository. The one
+//! A command-line default such as `grasp run`'s `--policy` (`crate::run::DEFAULT_POLICY`)
+//! is a path relative to the repository. The one
 //! rule: the path as given, relative to the working directory, when it exists there;
 //! otherwise the same path under the crate's source folder, baked in at compile time
 //! ([`SOURCE_DIR`]), so that the defaults work from another folder and from an installed
