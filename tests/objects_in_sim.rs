@@ -83,7 +83,7 @@ fn every_builtin_object_rests_stably_on_the_table() {
     let objs = specs("all");
     assert_eq!(objs.len(), 80);
     // The built-in config, then with the objects meeting the table with their hulls
-    // (configs/sim_table_hull.toml).
+    // (configs/levers/sim_table_hull.toml).
     let mut hull = SimConfig::default();
     hull.contacts.table_hull = true;
     let results: Vec<Rest> = [SimConfig::default(), hull]
@@ -301,7 +301,7 @@ fn a_dense_mesh_is_simplified_and_simulates() {
     assert!(lift.failure.is_none(), "{:?}", lift.failure);
 }
 
-/// With `contacts.table_hull` (configs/sim_table_hull.toml) a library object rests on the
+/// With `contacts.table_hull` (configs/levers/sim_table_hull.toml) a library object rests on the
 /// table through its convex hull (one manifold of at most four points) as it did on its
 /// convex parts: no contact of the object goes more than 0.1 mm deep in its first second,
 /// with the hull and part by part, and with the hull the table carries the object's

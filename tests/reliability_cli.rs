@@ -503,7 +503,10 @@ fn eval_uses_the_simulator_config_a_checkpoint_was_trained_with() {
         stderr(&o)
     };
     // Trained with another simulator config: evaluated in it, and told so.
-    let sim = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/sim_rapier_rows.toml");
+    let sim = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/levers/sim_rapier_rows.toml"
+    );
     let p = policy_trained_with(dir.path(), sim);
     let err = eval(&p, &[]);
     assert!(

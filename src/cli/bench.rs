@@ -28,13 +28,13 @@ pub enum BenchCommand {
     /// Simulator throughput: scripted close-and-lift episodes on one env, then on --envs
     /// envs in one rayon pool of --threads threads (default: the number of cores).
     #[command(
-        after_help = "Examples:\n  grasp bench sim\n  grasp bench sim --envs 20 --seconds 10 --json\n  grasp bench sim --compare configs/sim_rapier_rows.toml --rounds 3   # A/B in one run"
+        after_help = "Examples:\n  grasp bench sim\n  grasp bench sim --envs 20 --seconds 10 --json\n  grasp bench sim --compare configs/levers/sim_rapier_rows.toml --rounds 3   # A/B in one run"
     )]
     Sim(BenchSimArgs),
     /// Grasping-environment throughput: --envs environments with a random agent stepped
     /// in one VecEnv (the learner's harness), environment steps per second.
     #[command(
-        after_help = "Examples:\n  grasp bench env --envs 20 --seconds 20 --json\n  grasp bench env --envs 20 --compare configs/sim_rapier_rows.toml --rounds 3"
+        after_help = "Examples:\n  grasp bench env --envs 20 --seconds 20 --json\n  grasp bench env --envs 20 --compare configs/levers/sim_rapier_rows.toml --rounds 3"
     )]
     Env(BenchEnvArgs),
     /// CI regression check: a fixed-seed evaluation of baseline 2 and the shipped policy

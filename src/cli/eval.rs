@@ -12,12 +12,12 @@ use grasp::eval::rank::MAX_RANK_TOP;
 use grasp::eval::record::{agent_file_name, RecordOptions};
 use grasp::eval::{
     csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
-    read_results, text_table, unpaired_lines, AgentResult, AgentSpec, EvalAgent, PregraspStats,
-    RankStats, RankedPregrasp, TrialPlan,
+    read_results, text_table, unpaired_lines, AgentResult, AgentSpec, CountedPregrasp, EvalAgent,
+    PregraspStats, RankStats, RankedPregrasp, TrialPlan,
 };
-use grasp::perception::pregrasp::{AntipodalPregrasp, PlannedGrasp, PregraspPlanner};
+use grasp::perception::pregrasp::{AntipodalPregrasp, PregraspPlanner};
 use grasp::robot::{Robot, Side};
-use grasp::sim::{HandSim, SimConfig};
+use grasp::sim::SimConfig;
 use grasp::util::fsx::{check_writable_file, write_atomic};
 use grasp::util::signal;
 use std::path::{Path, PathBuf};
@@ -153,22 +153,6 @@ fn placement_name(p: Placement) -> String {
         .map_or_else(|| format!("{p:?}"), |v| v.get_name().to_string())
 }
 
-/// The antipodal planner (or a critic's ranking of its top placements), counting the
-/// episodes it placed and those it left at the default placement (shared by one agent's
-/// workers).
-struct CountedPregrasp {
-    inner: Box<dyn PregraspPlanner>,
-    counts: Arc<[AtomicUsize; 2]>,
-}
-
-impl PregraspPlanner for CountedPregrasp {
-    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
-        let p = self.inner.plan(sim, seed, avoid);
-        self.counts[usize::from(p.is_none())].fetch_add(1, Ordering::Relaxed);
-        p
-    }
-}
-
 /// The agent named by one `--policy` value; checkpoints act by sampling when `stochastic`.
 fn agent_spec(s: &str, stochastic: bool) -> Result<AgentSpec> {
     Ok(match s {
@@ -199,79 +183,27 @@ struct AgentEnv {
     network: Option<Arc<grasp::ppo::LoadedPolicy>>,
 }
 
-/// The simulator config every agent is evaluated in: `--sim-config` (with a warning for
-/// each checkpoint trained with another), else the one the checkpoints were trained with
-/// (refused when they differ: one physics for all agents keeps them comparable; a
-/// warning and the built-in one when its file cannot be read here), else the built-in
-/// one.
+/// The simulator config every agent is evaluated in
+/// ([`grasp::eval::physics::common_sim_config`]: `--sim-config`, else the checkpoints'
+/// own, else the built-in one).
 fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> Result<SimConfig> {
-    let label =
-        |p: Option<&PathBuf>| p.map_or("the built-in one".to_string(), |p| p.display().to_string());
-    let warn = |m: String| {
+    let flag = match flag {
+        Some(p) => Some((p.as_path(), super::sim_config(Some(p))?)),
+        None => None,
+    };
+    let trained: Vec<(&Path, Option<&Path>)> = agents
+        .iter()
+        .filter_map(|ag| Some((ag.spec.checkpoint()?, ag.trained_sim.as_ref()?.as_deref())))
+        .collect();
+    let (cfg, note) = grasp::eval::physics::common_sim_config(flag, &trained, &mut |m| {
         if !g.quiet {
             eprintln!("warning: {m}");
         }
-    };
-    let trained: Vec<(&Path, Option<&PathBuf>)> = agents
-        .iter()
-        .filter_map(|ag| Some((ag.spec.checkpoint()?, ag.trained_sim.as_ref()?.as_ref())))
-        .collect();
-    if let Some(p) = flag {
-        let cfg = super::sim_config(Some(p))?;
-        for (dir, t) in &trained {
-            if !SimConfig::load_or_default(t.map(|p| p.as_path())).is_ok_and(|c| c == cfg) {
-                warn(format!(
-                    "checkpoint {} was trained with simulator config {}; evaluating it with \
-                     --sim-config {}",
-                    dir.display(),
-                    label(*t),
-                    p.display()
-                ));
-            }
-        }
-        return Ok(cfg);
+    })?;
+    if let Some(n) = note.filter(|_| !g.quiet) {
+        eprintln!("{n}");
     }
-    let mut chosen: Option<(SimConfig, Option<&PathBuf>, &Path)> = None;
-    for (dir, t) in &trained {
-        let cfg = match SimConfig::load_or_default(t.map(|p| p.as_path())) {
-            Ok(c) => c,
-            Err(e) => {
-                warn(format!(
-                    "checkpoint {} was trained with simulator config {}, which cannot be \
-                     read here ({e:#}): evaluating with the built-in one (pass --sim-config \
-                     to choose)",
-                    dir.display(),
-                    label(*t)
-                ));
-                SimConfig::default()
-            }
-        };
-        match &chosen {
-            None => chosen = Some((cfg, *t, dir)),
-            Some((c, first, first_dir)) if *c != cfg => bail!(
-                "checkpoints {} and {} were trained with different simulator configs ({} and \
-                 {}): pass --sim-config to evaluate them in one",
-                first_dir.display(),
-                dir.display(),
-                label(*first),
-                label(*t)
-            ),
-            Some(_) => {}
-        }
-    }
-    Ok(match chosen {
-        Some((cfg, t, dir)) => {
-            if cfg != SimConfig::default() && !g.quiet {
-                eprintln!(
-                    "simulator config: {}, as checkpoint {} was trained with",
-                    label(t),
-                    dir.display()
-                );
-            }
-            cfg
-        }
-        None => SimConfig::default(),
-    })
+    Ok(cfg)
 }
 
 /// Resolves each agent's environment: checkpoints from their own config.toml
@@ -712,41 +644,6 @@ fn ranker(
     Ok(Some(Ranker { dir, critic, env }))
 }
 
-/// How a checkpoint's grip and lift act, for the progress line: "" with neither a grip
-/// nor a squeeze at the lift, else the grip's scale, delay and ramp and the squeeze, e.g.
-/// " (grip 0.25, ramped by 0.15 per step)" or " (grip 0.25, off for the first 1 step;
-/// squeezed by 0.25 at the lift)".
-fn grip_note(action: &grasp::env::action::ActionConfig) -> String {
-    use grasp::util::num::short;
-    let mut parts = Vec::new();
-    if action.grip_scale > 0.0 {
-        let mut grip = format!("grip {}", short(action.grip_scale));
-        if action.grip_delay > 0 {
-            let steps = if action.grip_delay == 1 {
-                "step"
-            } else {
-                "steps"
-            };
-            grip += &format!(", off for the first {} {steps}", action.grip_delay);
-        }
-        if action.grip_ramp > 0.0 {
-            grip += &format!(", ramped by {} per step", short(action.grip_ramp));
-        }
-        parts.push(grip);
-    }
-    if action.lift_squeeze > 0.0 {
-        parts.push(format!(
-            "squeezed by {} at the lift",
-            short(action.lift_squeeze)
-        ));
-    }
-    if parts.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", parts.join("; "))
-    }
-}
-
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     check_flags(a)?;
     let specs = a
@@ -825,7 +722,7 @@ fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
             eprintln!(
                 "evaluating {}{} on {} objects x {} trials ...",
                 ag.spec.label(),
-                grip_note(&ag.env.action),
+                ag.env.action.grip_note(),
                 names.len(),
                 a.trials
             );
@@ -990,8 +887,7 @@ fn lift_line(r: &grasp::eval::AgentResult) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{grip_note, lift_line};
-    use grasp::env::action::ActionConfig;
+    use super::lift_line;
 
     #[test]
     fn the_lift_line_tells_how_failed_lifts_ended_where_it_was_recorded() {
@@ -1015,32 +911,5 @@ mod tests {
         );
         assert!(line.contains(&want), "{line}");
         assert!(line.ends_with("deg in those that failed\n"), "{line}");
-    }
-
-    #[test]
-    fn the_grip_note_names_the_scale_the_delay_the_ramp_and_the_squeeze() {
-        let mut a = ActionConfig::default();
-        assert_eq!(grip_note(&a), "");
-        a.grip_scale = 0.25;
-        assert_eq!(grip_note(&a), " (grip 0.25)");
-        a.grip_delay = 1;
-        assert_eq!(grip_note(&a), " (grip 0.25, off for the first 1 step)");
-        a.grip_delay = 2;
-        a.grip_ramp = 0.15;
-        assert_eq!(
-            grip_note(&a),
-            " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step)"
-        );
-        a.lift_squeeze = 0.25;
-        assert_eq!(
-            grip_note(&a),
-            " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step; squeezed by \
-             0.25 at the lift)"
-        );
-        let squeeze_only = ActionConfig {
-            lift_squeeze: 0.5,
-            ..ActionConfig::default()
-        };
-        assert_eq!(grip_note(&squeeze_only), " (squeezed by 0.5 at the lift)");
     }
 }

@@ -92,6 +92,41 @@ pub struct ActionConfig {
 }
 
 impl ActionConfig {
+    /// How a checkpoint's grip and lift act, for the progress line: "" with neither a grip
+    /// nor a squeeze at the lift, else the grip's scale, delay and ramp and the squeeze, e.g.
+    /// " (grip 0.25, ramped by 0.15 per step)" or " (grip 0.25, off for the first 1 step;
+    /// squeezed by 0.25 at the lift)".
+    pub fn grip_note(&self) -> String {
+        use crate::util::num::short;
+        let mut parts = Vec::new();
+        if self.grip_scale > 0.0 {
+            let mut grip = format!("grip {}", short(self.grip_scale));
+            if self.grip_delay > 0 {
+                let steps = if self.grip_delay == 1 {
+                    "step"
+                } else {
+                    "steps"
+                };
+                grip += &format!(", off for the first {} {steps}", self.grip_delay);
+            }
+            if self.grip_ramp > 0.0 {
+                grip += &format!(", ramped by {} per step", short(self.grip_ramp));
+            }
+            parts.push(grip);
+        }
+        if self.lift_squeeze > 0.0 {
+            parts.push(format!(
+                "squeezed by {} at the lift",
+                short(self.lift_squeeze)
+            ));
+        }
+        if parts.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", parts.join("; "))
+        }
+    }
+
     /// Continuous action components for `n` synergies: `n + 2`, plus 1 with the grip.
     pub fn continuous(&self, n: usize) -> usize {
         n + 2 + usize::from(self.grip_scale > 0.0)
@@ -246,6 +281,33 @@ pub fn hand_targets(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_grip_note_names_the_scale_the_delay_the_ramp_and_the_squeeze() {
+        let mut a = ActionConfig::default();
+        assert_eq!(a.grip_note(), "");
+        a.grip_scale = 0.25;
+        assert_eq!(a.grip_note(), " (grip 0.25)");
+        a.grip_delay = 1;
+        assert_eq!(a.grip_note(), " (grip 0.25, off for the first 1 step)");
+        a.grip_delay = 2;
+        a.grip_ramp = 0.15;
+        assert_eq!(
+            a.grip_note(),
+            " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step)"
+        );
+        a.lift_squeeze = 0.25;
+        assert_eq!(
+            a.grip_note(),
+            " (grip 0.25, off for the first 2 steps, ramped by 0.15 per step; squeezed by \
+             0.25 at the lift)"
+        );
+        let squeeze_only = ActionConfig {
+            lift_squeeze: 0.5,
+            ..ActionConfig::default()
+        };
+        assert_eq!(squeeze_only.grip_note(), " (squeezed by 0.5 at the lift)");
+    }
+
     use super::*;
 
     /// The first 5 components of the shipped synergy model and the left hand's limits, for

@@ -19,6 +19,7 @@
 
 pub mod conditions;
 pub mod paired;
+pub mod physics;
 pub mod plot;
 pub mod pool;
 pub mod rank;
@@ -39,7 +40,7 @@ pub use results::{
 pub use tables::{csv_table, markdown_table, text_table};
 
 use crate::env::grasp::{EpisodeSummary, GraspEnv, GraspEnvError};
-pub use rank::RankedPregrasp;
+pub use rank::{CountedPregrasp, RankedPregrasp};
 use rayon::prelude::*;
 use record::RecordOptions;
 use results::failure_counts;
@@ -320,6 +321,9 @@ pub enum EvalError {
     /// The agent could not be loaded or run.
     #[error("agent: {0}")]
     Agent(String),
+    /// The agents cannot be evaluated in one physics ([`physics::common_sim_config`]).
+    #[error("{0}")]
+    Physics(String),
     /// A checkpoint's saved setup is unreadable or does not fit the request.
     #[error("checkpoint {path}: {message}")]
     Checkpoint {

@@ -104,6 +104,24 @@ impl PregraspPlanner for RankedPregrasp {
     }
 }
 
+/// The antipodal planner (or a critic's ranking of its top placements), counting the
+/// episodes it placed and those it left at the default placement (shared by one agent's
+/// workers).
+pub struct CountedPregrasp {
+    /// The planner.
+    pub inner: Box<dyn PregraspPlanner>,
+    /// Episodes placed by a plan, and left at the default placement (no plan).
+    pub counts: Arc<[AtomicUsize; 2]>,
+}
+
+impl PregraspPlanner for CountedPregrasp {
+    fn plan(&mut self, sim: &HandSim, seed: u64, avoid: &[PlannedGrasp]) -> Option<PlannedGrasp> {
+        let p = self.inner.plan(sim, seed, avoid);
+        self.counts[usize::from(p.is_none())].fetch_add(1, Ordering::Relaxed);
+        p
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -817,9 +817,12 @@ mod tests {
 
     #[test]
     fn table_hull_config_is_the_default_but_for_its_switch() {
-        let path = Path::new("configs/sim_table_hull.toml");
-        let hull =
-            SimConfig::parse(path, include_str!("../../configs/sim_table_hull.toml")).unwrap();
+        let path = Path::new("configs/levers/sim_table_hull.toml");
+        let hull = SimConfig::parse(
+            path,
+            include_str!("../../configs/levers/sim_table_hull.toml"),
+        )
+        .unwrap();
         let mut default = SimConfig::default();
         assert!(!default.contacts.table_hull && hull.contacts.table_hull);
         default.contacts.table_hull = true;
