@@ -134,6 +134,13 @@ def test_bad_setup_raises():
         env(action_format="tuple")
     with pytest.raises(ValueError, match="grasping environment"):
         grasp_rl.GraspEnv(config=ROOT / "configs" / "cartpole.toml")
+    # The core classes take only their own keywords, each of its type.
+    from grasp_rl import _core
+
+    with pytest.raises(TypeError, match="unexpected keyword argument 'num_envs'"):
+        _core.CoreEnv(num_envs=2)
+    with pytest.raises(TypeError, match="argument 'objects'"):
+        _core.CoreVecEnv(objects=3)
 
 
 def test_config_file_and_modality():

@@ -2,16 +2,11 @@
 //! actor and the critic, then the heads (the layout of CleanRL's `ppo_atari_lstm`, with a
 //! GRU as in the paper).
 
-use super::parts::{ActorHeads, Core, MlpCritic};
-use super::{
-    ActorCritic, Params, PolicyConfig, PolicyError, PolicyOutput, GAIN_CRITIC, GAIN_HIDDEN,
-};
-use crate::env::api::ActionSpec;
+use super::parts::{ActorHeads, Core, MlpCritic, NetShape};
+use super::{ActorCritic, PolicyError, PolicyOutput, GAIN_CRITIC, GAIN_HIDDEN};
 use candle_core::{DType, Device, Module, Tensor};
 use candle_nn::rnn::{GRUConfig, GRUState, GRU, RNN};
 use candle_nn::{Linear, VarBuilder};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use std::collections::HashMap;
 
 /// A GRU actor-critic: `embed` (Linear + tanh) -> `gru` (one layer) -> `actor.mean`,
@@ -34,20 +29,15 @@ enum Critic {
 }
 
 impl GruPolicy {
-    /// Builds the network for `obs_dim` inputs and actions `spec`, initialised from `seed`.
-    pub fn new(
-        cfg: &PolicyConfig,
-        obs_dim: usize,
-        spec: ActionSpec,
-        seed: u64,
-    ) -> Result<Self, PolicyError> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut p = Params::default();
+    /// Builds the network of `shape`, initialised from `seed`.
+    pub fn new(shape: NetShape<'_>, seed: u64) -> Result<Self, PolicyError> {
+        let NetShape { cfg, obs_dim, spec } = shape;
+        let (mut p, mut rng) = shape.start(seed);
         let (e, h) = (cfg.embed_dim, cfg.gru_hidden);
         let actor_dim = obs_dim - cfg.critic_state;
         let embed = p.linear("embed", actor_dim, e, GAIN_HIDDEN, &mut rng)?;
-        // The GRU's tensors are saved as `gru.<name>` and handed to candle's GRU as
-        // `<name>`, the names it looks up.
+        // The GRU's tensors, `gru.<name>` with the names candle's GRU looks up under the
+        // prefix `gru`.
         let mut gru_ts = HashMap::new();
         for (name, data, shape) in [
             (
@@ -61,17 +51,15 @@ impl GruPolicy {
                 [3 * h, h],
             ),
         ] {
-            gru_ts.insert(
-                name.to_string(),
-                p.add(&format!("gru.{name}"), data, &shape)?,
-            );
+            let name = format!("gru.{name}");
+            gru_ts.insert(name.clone(), p.add(&name, data, &shape)?);
         }
         for name in ["bias_ih_l0", "bias_hh_l0"] {
-            let bias = p.add(&format!("gru.{name}"), vec![0.0; 3 * h], &[3 * h])?;
-            gru_ts.insert(name.to_string(), bias);
+            let name = format!("gru.{name}");
+            gru_ts.insert(name.clone(), p.add(&name, vec![0.0; 3 * h], &[3 * h])?);
         }
         let vb = VarBuilder::from_tensors(gru_ts, DType::F32, &Device::Cpu);
-        let gru = candle_nn::rnn::gru(e, h, GRUConfig::default(), vb)?;
+        let gru = candle_nn::rnn::gru(e, h, GRUConfig::default(), vb.pp("gru"))?;
         let heads = ActorHeads::new(&mut p, cfg, h, spec, &mut rng)?;
         let critic = if cfg.critic_state == 0 {
             Critic::Linear(p.linear("critic", h, 1, GAIN_CRITIC, &mut rng)?)
@@ -143,7 +131,11 @@ impl ActorCritic for GruPolicy {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::env::api::ActionSpec;
+    use crate::policy::PolicyConfig;
     use rand::Rng;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
 
     fn policy() -> GruPolicy {
         let cfg = PolicyConfig {
@@ -155,7 +147,15 @@ mod tests {
             continuous: 2,
             lift: true,
         };
-        GruPolicy::new(&cfg, 3, spec, 11).unwrap()
+        GruPolicy::new(
+            NetShape {
+                cfg: &cfg,
+                obs_dim: 3,
+                spec,
+            },
+            11,
+        )
+        .unwrap()
     }
 
     fn rand_tensor(shape: &[usize], seed: u64) -> Tensor {
@@ -244,7 +244,15 @@ mod tests {
             continuous: 2,
             lift: true,
         };
-        let p = GruPolicy::new(&cfg, 5, spec, 11).unwrap();
+        let p = GruPolicy::new(
+            NetShape {
+                cfg: &cfg,
+                obs_dim: 5,
+                spec,
+            },
+            11,
+        )
+        .unwrap();
         assert_eq!(p.params().vars()["embed.weight"].dims(), &[8, 3]);
         assert_eq!(p.params().vars()["critic.fc1.weight"].dims(), &[5, 6 + 2]);
         let starts = Tensor::ones((1, 1), DType::F32, &Device::Cpu).unwrap();

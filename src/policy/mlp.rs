@@ -1,12 +1,9 @@
 //! The feed-forward actor-critic: separate two-layer tanh MLPs for the actor and the critic
 //! (CleanRL's `ppo_continuous_action` agent).
 
-use super::parts::{ActorHeads, Core, MlpCritic, TanhMlp};
-use super::{ActorCritic, Params, PolicyConfig, PolicyError, PolicyOutput};
-use crate::env::api::ActionSpec;
+use super::parts::{ActorHeads, Core, MlpCritic, NetShape, TanhMlp};
+use super::{ActorCritic, PolicyError, PolicyOutput};
 use candle_core::Tensor;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 
 /// A feed-forward actor-critic with two tanh hidden layers in each of the actor and the
 /// critic. It ignores episode starts and has no recurrent state.
@@ -19,15 +16,10 @@ pub struct MlpPolicy {
 }
 
 impl MlpPolicy {
-    /// Builds the network for `obs_dim` inputs and actions `spec`, initialised from `seed`.
-    pub fn new(
-        cfg: &PolicyConfig,
-        obs_dim: usize,
-        spec: ActionSpec,
-        seed: u64,
-    ) -> Result<Self, PolicyError> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut p = Params::default();
+    /// Builds the network of `shape`, initialised from `seed`.
+    pub fn new(shape: NetShape<'_>, seed: u64) -> Result<Self, PolicyError> {
+        let NetShape { cfg, obs_dim, spec } = shape;
+        let (mut p, mut rng) = shape.start(seed);
         let h = cfg.mlp_hidden;
         // With an asymmetric critic the actor reads the observation without its last
         // `critic_state` values; the critic reads all of it.

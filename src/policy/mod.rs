@@ -22,7 +22,7 @@ mod parts;
 pub use dist::{ActionDist, SampledActions};
 pub use gru::GruPolicy;
 pub use mlp::MlpPolicy;
-pub use parts::Core;
+pub use parts::{Core, NetShape};
 
 use crate::env::api::ActionSpec;
 use candle_core::{DType, Device, Tensor, Var};
@@ -253,9 +253,10 @@ pub fn build_policy(
             message: "the action needs at least one continuous component".into(),
         });
     }
+    let shape = NetShape { cfg, obs_dim, spec };
     Ok(match cfg.kind {
-        PolicyKind::Gru => Box::new(GruPolicy::new(cfg, obs_dim, spec, seed)?),
-        PolicyKind::Mlp => Box::new(MlpPolicy::new(cfg, obs_dim, spec, seed)?),
+        PolicyKind::Gru => Box::new(GruPolicy::new(shape, seed)?),
+        PolicyKind::Mlp => Box::new(MlpPolicy::new(shape, seed)?),
     })
 }
 

@@ -1,5 +1,5 @@
-//! The layers both actor-critics are built from: what every network holds besides its
-//! layers ([`Core`]), the actor's heads ([`ActorHeads`]: the Gaussian's mean and log
+//! The layers both actor-critics are built from: what they are built for ([`NetShape`]),
+//! what every network holds besides its layers ([`Core`]), the actor's heads ([`ActorHeads`]: the Gaussian's mean and log
 //! standard deviation, the lift logit), two tanh layers ([`TanhMlp`]) and the MLP value
 //! head ([`MlpCritic`]). Each adds its parameters under the names of the table in
 //! [`super`], drawing its weights from the model's RNG in the order written here.
@@ -8,7 +8,28 @@ use super::{ActionDist, Params, PolicyConfig, GAIN_ACTOR, GAIN_CRITIC, GAIN_HIDD
 use crate::env::api::ActionSpec;
 use candle_core::{Module, Tensor};
 use candle_nn::Linear;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+
+/// What an actor-critic is built for: its config, the length of the observation it reads
+/// and the shape of its actions.
+#[derive(Debug, Clone, Copy)]
+pub struct NetShape<'a> {
+    /// The network's settings.
+    pub cfg: &'a PolicyConfig,
+    /// Observation length.
+    pub obs_dim: usize,
+    /// Action shape.
+    pub spec: ActionSpec,
+}
+
+impl NetShape<'_> {
+    /// The empty parameter table a network of this shape fills, and the stream seeded by
+    /// `seed` that initialises its weights in the order they are added.
+    pub(super) fn start(&self, seed: u64) -> (Params, ChaCha8Rng) {
+        (Params::default(), ChaCha8Rng::seed_from_u64(seed))
+    }
+}
 
 /// What every actor-critic holds besides its layers: its parameters by name, the length
 /// of the observation it reads, how much of it the actor reads (the first values; the

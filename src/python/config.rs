@@ -5,8 +5,9 @@
 use super::error::config_error;
 use crate::env::curriculum::CurriculumConfig;
 use crate::train::TrainConfig;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
 
 /// The built-in defaults: `configs/base.toml` (the recipe of the shipped policy), embedded.
@@ -31,6 +32,50 @@ pub struct Overrides {
     /// A fixed curriculum level `r_s` in [0, 1] (the curriculum off), as `grasp eval
     /// --difficulty`.
     pub difficulty: Option<f64>,
+}
+
+/// The keyword arguments of an environment class (`CoreEnv`, `CoreVecEnv`): `config` (a
+/// path) or `config_toml` (text), and the overrides the class takes, `keys`, each `None`
+/// when absent. Any other keyword is a `TypeError` naming it and those accepted. Returns
+/// the config resolved as [`load`] resolves it.
+pub fn load_kwargs(
+    kwargs: Option<&Bound<'_, PyDict>>,
+    keys: &[&str],
+) -> PyResult<(TrainConfig, String)> {
+    fn item<'py, T: for<'a> FromPyObject<'a, 'py, Error = PyErr>>(
+        kwargs: Option<&Bound<'py, PyDict>>,
+        key: &str,
+    ) -> PyResult<Option<T>> {
+        match kwargs.map(|d| d.get_item(key)).transpose()?.flatten() {
+            Some(v) if !v.is_none() => v
+                .extract()
+                .map(Some)
+                .map_err(|e| PyTypeError::new_err(format!("argument '{key}': {e}"))),
+            _ => Ok(None),
+        }
+    }
+    if let Some(d) = kwargs {
+        for k in d.keys() {
+            let k: String = k.extract()?;
+            if !(k == "config" || k == "config_toml" || keys.contains(&k.as_str())) {
+                return Err(PyTypeError::new_err(format!(
+                    "unexpected keyword argument '{k}': expected config, config_toml{}",
+                    keys.iter().map(|k| format!(", {k}")).collect::<String>()
+                )));
+            }
+        }
+    }
+    // Only the class's keys can be present (checked above).
+    let o = Overrides {
+        objects: item(kwargs, "objects")?,
+        num_envs: item(kwargs, "num_envs")?,
+        threads: item(kwargs, "threads")?,
+        seed: item(kwargs, "seed")?,
+        difficulty: item(kwargs, "difficulty")?,
+    };
+    let config: Option<PathBuf> = item(kwargs, "config")?;
+    let config_toml: Option<String> = item(kwargs, "config_toml")?;
+    load(config.as_deref(), config_toml.as_deref(), &o)
 }
 
 /// Where a config comes from.

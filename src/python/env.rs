@@ -3,7 +3,7 @@
 //! scripted baselines on its scenes.
 
 use super::actions::{decode, f32_bytes};
-use super::config::{load, Overrides};
+use super::config::load_kwargs;
 use super::error::{config_error, locked, no_panic};
 use crate::env::api::Env;
 use crate::env::grasp::{EpisodeSummary, GraspEnv};
@@ -11,7 +11,6 @@ use crate::train::envs::grasp_envs;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use std::path::PathBuf;
 use std::sync::Mutex;
 
 /// Where the episode stands.
@@ -73,21 +72,11 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
 impl CoreEnv {
     /// Builds the environment of `config` (a training config file; None: the built-in
     /// defaults, configs/base.toml) with the overrides given.
+    /// Keywords: `config`, `objects`, `difficulty`, `config_toml`.
     #[new]
-    #[pyo3(signature = (config=None, objects=None, difficulty=None, config_toml=None))]
-    fn new(
-        py: Python<'_>,
-        config: Option<PathBuf>,
-        objects: Option<String>,
-        difficulty: Option<f64>,
-        config_toml: Option<String>,
-    ) -> PyResult<Self> {
-        let o = Overrides {
-            objects,
-            difficulty,
-            ..Overrides::default()
-        };
-        let (cfg, config_toml) = load(config.as_deref(), config_toml.as_deref(), &o)?;
+    #[pyo3(signature = (**kwargs))]
+    fn new(py: Python<'_>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let (cfg, config_toml) = load_kwargs(kwargs, &["objects", "difficulty"])?;
         let (mut envs, _) = py
             .detach(|| no_panic("building the environment", || grasp_envs(&cfg, 1)))?
             .map_err(config_error)?;

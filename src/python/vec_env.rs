@@ -4,7 +4,7 @@
 //! [`VecEnv`] with the GIL released, resetting finished episodes on the same step.
 
 use super::actions::{decode, f32_bytes};
-use super::config::{load, Overrides};
+use super::config::load_kwargs;
 use super::error::{config_error, env_error, locked, no_panic};
 use crate::env::api::VecEnv;
 use crate::env::grasp::{EpisodeSummary, GraspEnv};
@@ -12,7 +12,6 @@ use crate::train::envs::{build_envs, CurriculumLevels, TrainEnvs};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
-use std::path::PathBuf;
 use std::sync::Mutex;
 
 /// The environments of a config stepped together.
@@ -76,28 +75,13 @@ impl CoreVecEnv {
 impl CoreVecEnv {
     /// Builds the environments of `config` (a training config file; None: the built-in
     /// defaults, configs/base.toml) with the overrides given.
+    /// Keywords: `config`, `objects`, `num_envs`, `threads`, `seed`, `difficulty`,
+    /// `config_toml`.
     #[new]
-    // One argument per Python keyword.
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (config=None, objects=None, num_envs=None, threads=None, seed=None, difficulty=None, config_toml=None))]
-    fn new(
-        py: Python<'_>,
-        config: Option<PathBuf>,
-        objects: Option<String>,
-        num_envs: Option<usize>,
-        threads: Option<usize>,
-        seed: Option<u64>,
-        difficulty: Option<f64>,
-        config_toml: Option<String>,
-    ) -> PyResult<Self> {
-        let o = Overrides {
-            objects,
-            num_envs,
-            threads,
-            seed,
-            difficulty,
-        };
-        let (cfg, config_toml) = load(config.as_deref(), config_toml.as_deref(), &o)?;
+    #[pyo3(signature = (**kwargs))]
+    fn new(py: Python<'_>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let keys = ["objects", "num_envs", "threads", "seed", "difficulty"];
+        let (cfg, config_toml) = load_kwargs(kwargs, &keys)?;
         let threads = cfg.env_threads();
         let TrainEnvs { envs, levels, .. } = py
             .detach(|| no_panic("building the environments", || build_envs(&cfg)))?
