@@ -284,6 +284,13 @@ impl PolicyRunner {
     /// without them the environment defaults and the shipped synergy model are used).
     /// The policy acts deterministically (the mode of its distribution).
     pub fn load(dir: &Path) -> Result<PolicyRunner, RunError> {
+        Ok(PolicyRunner::new(&Self::load_agent(dir)?))
+    }
+
+    /// The trained agent of checkpoint folder `dir` ([`TrainedAgent::load`]), loaded once
+    /// for any number of runners ([`PolicyRunner::new`]); a warning where it acts in the
+    /// shipped synergy model for want of its own.
+    pub fn load_agent(dir: &Path) -> Result<TrainedAgent, RunError> {
         let trained = TrainedAgent::load(dir).map_err(|e| RunError::Policy {
             path: dir.to_path_buf(),
             detail: e.message,
@@ -294,7 +301,7 @@ impl PolicyRunner {
                 dir.display()
             );
         }
-        Ok(PolicyRunner::new(&trained))
+        Ok(trained)
     }
 
     /// The runner of a loaded agent, acting deterministically.

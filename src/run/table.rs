@@ -207,15 +207,22 @@ pub fn run_table<A: SimulatedArm>(
             detail: format!("{} must be in 1..={}", cfg.trials, crate::eval::MAX_TRIALS),
         });
     }
-    // Every checkpoint loads before any trial runs.
-    for a in agents {
-        if let TableAgent::Policy { dir, .. } = a {
-            PolicyRunner::load(dir).map_err(|source| TableError::Policy {
-                path: dir.clone(),
-                source,
-            })?;
-        }
-    }
+    // Every checkpoint loads once, before any trial runs; each job acts through a runner
+    // of its own (its recurrent state) on the shared network.
+    let trained = agents
+        .iter()
+        .map(|a| match a {
+            TableAgent::Policy { dir, .. } => {
+                PolicyRunner::load_agent(dir)
+                    .map(Some)
+                    .map_err(|source| TableError::Policy {
+                        path: dir.clone(),
+                        source,
+                    })
+            }
+            _ => Ok(None),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let logs = tempfile::tempdir().map_err(|e| {
         TableError::Log(LogError::Io {
             path: std::env::temp_dir(),
@@ -234,15 +241,7 @@ pub fn run_table<A: SimulatedArm>(
     let done: Vec<Vec<TrialResult>> = pool.install(|| {
         jobs.par_iter()
             .map(|&(a, o)| -> Result<Vec<TrialResult>, TableError> {
-                let mut runner = match &agents[a] {
-                    TableAgent::Policy { dir, .. } => Some(PolicyRunner::load(dir).map_err(
-                        |source| TableError::Policy {
-                            path: dir.clone(),
-                            source,
-                        },
-                    )?),
-                    _ => None,
-                };
+                let mut runner = trained[a].as_ref().map(PolicyRunner::new);
                 let mut out = Vec::with_capacity(cfg.trials);
                 for t in 0..cfg.trials {
                     let mut controller = controller(&agents[a], runner.as_mut());
