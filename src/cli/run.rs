@@ -20,7 +20,7 @@ use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
 use grasp::run::simulated::SimulatedArm;
 use grasp::run::table::{run_table, TableAgent, TableConfig};
 use grasp::sim::SimConfig;
-use grasp::util::assets;
+use grasp::util::{assets, signal};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -615,19 +615,67 @@ fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
     }
     let robot = Robot::builtin(Side::Left);
     let tick = || bar.inc(1);
-    let results = run_table::<A>(&robot, &objects, &agents, &cfg, a.log.as_deref(), &tick)
-        .context("running the table")?;
+    signal::stop_on_signal(
+        "finishing the trials in progress, then printing the finished ones",
+        g.quiet,
+    )
+    .context("installing the Ctrl-C and SIGTERM handler")?;
+    let mut results = run_table::<A>(
+        &robot,
+        &objects,
+        &agents,
+        &cfg,
+        a.log.as_deref(),
+        &tick,
+        Some(&signal::STOP),
+    )
+    .context("running the table")?;
     bar.finish_and_clear();
+    let interrupted = signal::stopped();
+    // An agent none of whose trials finished before a signal has nothing to report.
+    results.retain(|r| !r.result.objects.is_empty());
+    if interrupted && results.is_empty() {
+        eprintln!("interrupted (SIGINT or SIGTERM) before any trial finished: nothing to report");
+        std::process::exit(130);
+    }
     if g.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
-        return Ok(());
+    } else {
+        print_table(&results);
     }
+    if let Some(p) = a.log.as_ref().filter(|_| !g.json) {
+        eprintln!("attempt logs appended to {}", p.display());
+    }
+    if interrupted {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        if !g.quiet {
+            eprintln!(
+                "interrupted (SIGINT or SIGTERM): the results above are of the trials that \
+                 finished"
+            );
+        }
+        // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
+        std::process::exit(130);
+    }
+    Ok(())
+}
+
+/// The table's text: `grasp eval`'s table, physics and paired lines, and each failed
+/// trial's reason.
+fn print_table(results: &[grasp::run::table::TableAgentResult]) {
     let plain: Vec<grasp::eval::AgentResult> = results.iter().map(|r| r.result.clone()).collect();
     print!("{}", grasp::eval::text_table(&plain));
     for r in &plain {
         print!("{}", grasp::eval::physics_line(r));
+        if r.interrupted {
+            println!(
+                "{}: interrupted (SIGINT or SIGTERM): only the trials that finished are counted",
+                r.agent
+            );
+        }
     }
-    for r in &results {
+    for r in results {
         for e in &r.trial_errors {
             println!(
                 "{}: {} trial {} failed: {}",
@@ -638,10 +686,6 @@ fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
     let pairs = grasp::eval::paired_lines(&grasp::eval::paired_with_first(&plain))
         + &grasp::eval::unpaired_lines(&plain);
     print!("{pairs}");
-    if let Some(p) = &a.log {
-        eprintln!("attempt logs appended to {}", p.display());
-    }
-    Ok(())
 }
 
 /// A progress bar of `total` trials on stderr when `show` and stderr is a terminal.

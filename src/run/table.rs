@@ -192,7 +192,9 @@ struct TrialResult {
 /// `on_trial` is called as each trial ends (a progress bar). With `log`, every attempt's
 /// log lines are appended to that JSON-lines file, agent by agent, object by object,
 /// trial by trial; without, none is written. The same `cfg` gives the same results (wall
-/// times aside).
+/// times aside). Once `stop` is set (a signal) no trial starts: the trials in progress
+/// finish, and each agent's result holds the finished ones, marked `interrupted`
+/// ([`crate::eval::aggregate`]).
 pub fn run_table<A: SimulatedArm>(
     robot: &Robot,
     objects: &[(String, ObjectSpec)],
@@ -200,7 +202,9 @@ pub fn run_table<A: SimulatedArm>(
     cfg: &TableConfig,
     log: Option<&Path>,
     on_trial: &(dyn Fn() + Sync),
+    stop: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<Vec<TableAgentResult>, TableError> {
+    let stopped = || stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
     if cfg.trials == 0 || cfg.trials > crate::eval::MAX_TRIALS {
         return Err(TableError::Config {
             field: "trials",
@@ -244,6 +248,9 @@ pub fn run_table<A: SimulatedArm>(
                 let mut runner = trained[a].as_ref().map(PolicyRunner::new);
                 let mut out = Vec::with_capacity(cfg.trials);
                 for t in 0..cfg.trials {
+                    if stopped() {
+                        break;
+                    }
                     let mut controller = controller(&agents[a], runner.as_mut());
                     let mut file = AttemptLog::open(&log_path(a, o, t))?;
                     out.push(run_trial::<A>(
