@@ -160,7 +160,7 @@ fn an_interrupted_table_prints_what_finished() {
         "--objects",
         "box_sugar,box_gelatin,can_soup",
         "--trials",
-        "4",
+        "20",
         "--threads",
         "1",
         "--policy",

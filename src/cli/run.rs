@@ -604,6 +604,12 @@ fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
     };
     let total = (agents.len() * objects.len() * a.trials) as u64;
     let bar = progress_bar(total, !(g.quiet || g.json));
+    // Installed before the table is announced: a signal from then on stops it cleanly.
+    signal::stop_on_signal(
+        "finishing the trials in progress, then printing the finished ones",
+        g.quiet,
+    )
+    .context("installing the Ctrl-C and SIGTERM handler")?;
     if !g.quiet && !g.json {
         eprintln!(
             "running {} agents on {} objects x {} trials through the {} robot ...",
@@ -615,11 +621,6 @@ fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
     }
     let robot = Robot::builtin(Side::Left);
     let tick = || bar.inc(1);
-    signal::stop_on_signal(
-        "finishing the trials in progress, then printing the finished ones",
-        g.quiet,
-    )
-    .context("installing the Ctrl-C and SIGTERM handler")?;
     let mut results = run_table::<A>(
         &robot,
         &objects,
