@@ -395,42 +395,25 @@ fn a_recording_that_cannot_be_written_keeps_the_results() {
 #[cfg(unix)]
 #[test]
 fn an_interrupted_evaluation_prints_and_writes_what_finished() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("a.csv");
-    let mut child = cmd(&[
-        "eval",
-        "--policy",
-        "baseline2",
-        "--objects",
-        "train",
-        "--trials",
-        "3",
-        "--threads",
-        "1",
-        "--csv",
-        s(&csv),
-    ])
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
     // The handler is installed before the first agent is announced.
-    let mut err = BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    while err.read_line(&mut line).unwrap() > 0 && !line.contains("evaluating") {
-        line.clear();
-    }
-    assert!(line.contains("evaluating"), "{line}");
-    let st = std::process::Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(st.success());
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
-    let o = child.wait_with_output().unwrap();
+    let (o, rest) = terminated_after(
+        &[
+            "eval",
+            "--policy",
+            "baseline2",
+            "--objects",
+            "train",
+            "--trials",
+            "3",
+            "--threads",
+            "1",
+            "--csv",
+            s(&csv),
+        ],
+        "evaluating",
+    );
     let out = stdout(&o);
     assert_eq!(o.status.code(), Some(130), "{rest}");
     assert!(!rest.contains("panicked"), "{rest}");

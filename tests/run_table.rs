@@ -6,7 +6,7 @@
 #[path = "common/cli.rs"]
 mod cli;
 
-use cli::{assert_fails, assert_fails_with, cmd, grasp, s, stderr, stdout};
+use cli::{assert_fails, assert_fails_with, grasp, s, stderr, stdout};
 
 const POLICY: &str = "assets/policies/fig5_gru_m3_pca8";
 
@@ -151,40 +151,23 @@ fn flags_that_do_not_fit_a_table_are_clear_errors() {
 #[cfg(unix)]
 #[test]
 fn an_interrupted_table_prints_what_finished() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
-    let mut child = cmd(&[
-        "run",
-        "--backend",
-        "sim",
-        "--objects",
-        "box_sugar,box_gelatin,can_soup",
-        "--trials",
-        "20",
-        "--threads",
-        "1",
-        "--policy",
-        "baseline2",
-    ])
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
     // The handler is installed before the table is announced.
-    let mut err = BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    while err.read_line(&mut line).unwrap() > 0 && !line.contains("running") {
-        line.clear();
-    }
-    assert!(line.contains("running 1 agents"), "{line}");
-    let st = std::process::Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(st.success());
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
-    let o = child.wait_with_output().unwrap();
+    let (o, rest) = cli::terminated_after(
+        &[
+            "run",
+            "--backend",
+            "sim",
+            "--objects",
+            "box_sugar,box_gelatin,can_soup",
+            "--trials",
+            "20",
+            "--threads",
+            "1",
+            "--policy",
+            "baseline2",
+        ],
+        "running 1 agents",
+    );
     let out = stdout(&o);
     assert_eq!(o.status.code(), Some(130), "{rest}");
     assert!(!rest.contains("panicked"), "{rest}");

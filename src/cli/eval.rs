@@ -324,8 +324,7 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
     };
     let interrupted = signal::stopped();
     if interrupted && results.is_empty() {
-        eprintln!("interrupted (SIGINT or SIGTERM) before any trial finished: nothing to report");
-        std::process::exit(130);
+        super::exit_interrupted(" before any trial finished: nothing to report", false);
     }
     if !a.labels.is_empty() {
         // Agents a signal kept from starting have no results (nor labels to take).
@@ -369,16 +368,10 @@ pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
         super::finish_recordings(dir, &entries, &errors, g.quiet)?;
     }
     if interrupted {
-        use std::io::Write;
-        let _ = std::io::stdout().flush();
-        if !g.quiet {
-            eprintln!(
-                "interrupted (SIGINT or SIGTERM): the results above are of the trials that \
-                 finished"
-            );
-        }
-        // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
-        std::process::exit(130);
+        super::exit_interrupted(
+            ": the results above are of the trials that finished",
+            g.quiet,
+        );
     }
     Ok(())
 }

@@ -276,6 +276,19 @@ pub fn check_difficulty(d: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Ends a command that a SIGINT or SIGTERM stopped
+/// ([`grasp::util::signal::stop_on_signal`]): stdout is flushed, `"interrupted (SIGINT or
+/// SIGTERM): {what}"` is said on stderr unless `quiet`, and the exit status is 130 (128 +
+/// SIGINT, as a shell reports a process ended by Ctrl-C).
+pub fn exit_interrupted(what: &str, quiet: bool) -> ! {
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+    if !quiet {
+        eprintln!("interrupted (SIGINT or SIGTERM){what}");
+    }
+    std::process::exit(130);
+}
+
 /// Checks an `--attempts` flag: 1..=[`grasp::eval::MAX_ATTEMPTS`]; `what` says what one attempt is.
 pub fn check_attempts(n: usize, what: &str) -> anyhow::Result<()> {
     use grasp::eval::MAX_ATTEMPTS;

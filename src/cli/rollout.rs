@@ -68,8 +68,7 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     done.sort_by_key(|d| d.0);
     let interrupted = signal::stopped();
     if interrupted && done.is_empty() {
-        eprintln!("interrupted (SIGINT or SIGTERM) before any episode finished: nothing to report");
-        std::process::exit(130);
+        super::exit_interrupted(" before any episode finished: nothing to report", false);
     }
     // The episodes are printed before any file is written: a failed write loses nothing.
     let all: Vec<(usize, EpisodeSummary)> = done.iter().map(|d| (d.0, d.1.clone())).collect();
@@ -80,16 +79,14 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
         super::finish_recordings(dir, &entries, &errors, g.quiet)?;
     }
     if interrupted {
-        use std::io::Write;
-        let _ = std::io::stdout().flush();
-        if !g.quiet {
-            eprintln!(
-                "interrupted (SIGINT or SIGTERM): {} of {} episodes finished, printed above",
+        super::exit_interrupted(
+            &format!(
+                ": {} of {} episodes finished, printed above",
                 all.len(),
                 a.episodes
-            );
-        }
-        std::process::exit(130);
+            ),
+            g.quiet,
+        );
     }
     Ok(())
 }

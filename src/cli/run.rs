@@ -636,8 +636,7 @@ fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
     // An agent none of whose trials finished before a signal has nothing to report.
     results.retain(|r| !r.result.objects.is_empty());
     if interrupted && results.is_empty() {
-        eprintln!("interrupted (SIGINT or SIGTERM) before any trial finished: nothing to report");
-        std::process::exit(130);
+        super::exit_interrupted(" before any trial finished: nothing to report", false);
     }
     if g.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
@@ -648,16 +647,10 @@ fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
         eprintln!("attempt logs appended to {}", p.display());
     }
     if interrupted {
-        use std::io::Write;
-        let _ = std::io::stdout().flush();
-        if !g.quiet {
-            eprintln!(
-                "interrupted (SIGINT or SIGTERM): the results above are of the trials that \
-                 finished"
-            );
-        }
-        // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
-        std::process::exit(130);
+        super::exit_interrupted(
+            ": the results above are of the trials that finished",
+            g.quiet,
+        );
     }
     Ok(())
 }

@@ -63,3 +63,35 @@ pub fn eval_one(extra: &[&str]) -> Output {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// Starts `grasp` with `args`, waits until a line of its stderr contains `announced` (the
+/// command has installed its signal handler by then), sends it SIGTERM and waits for it.
+/// Returns its output (stdout; stderr is empty) and the stderr it wrote from that line
+/// on, the line included.
+#[cfg(unix)]
+pub fn terminated_after(args: &[&str], announced: &str) -> (Output, String) {
+    use std::io::{BufRead, BufReader, Read};
+    use std::process::Stdio;
+    let mut child = cmd(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start grasp");
+    let mut err = BufReader::new(child.stderr.take().expect("piped stderr"));
+    let mut line = String::new();
+    while err.read_line(&mut line).expect("read stderr") > 0 && !line.contains(announced) {
+        line.clear();
+    }
+    assert!(
+        line.contains(announced),
+        "no `{announced}` on stderr: {line}"
+    );
+    let st = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(st.success());
+    let mut rest = line;
+    err.read_to_string(&mut rest).expect("read stderr");
+    (child.wait_with_output().expect("wait for grasp"), rest)
+}
