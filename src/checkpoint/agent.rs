@@ -232,11 +232,7 @@ impl TrainedAgent {
 
     /// Its MDP at a fixed difficulty (the curriculum off), as every evaluation runs it.
     pub fn at_difficulty(&mut self, difficulty: f64) -> &mut Self {
-        self.env.curriculum = CurriculumConfig {
-            enabled: false,
-            fixed_rate: difficulty,
-            ..CurriculumConfig::default()
-        };
+        self.env.curriculum = CurriculumConfig::fixed(difficulty);
         self
     }
 

@@ -224,7 +224,7 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
         .map(|spec| {
             let Some(dir) = spec.checkpoint() else {
                 let mut env = flag_env.clone();
-                env.curriculum = fixed_difficulty(a.difficulty);
+                env.curriculum = CurriculumConfig::fixed(a.difficulty);
                 return Ok(AgentEnv {
                     spec,
                     env,
@@ -274,15 +274,6 @@ fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<Age
             })
         })
         .collect()
-}
-
-/// The curriculum of an evaluation: off, at `difficulty`.
-fn fixed_difficulty(difficulty: f64) -> CurriculumConfig {
-    CurriculumConfig {
-        enabled: false,
-        fixed_rate: difficulty,
-        ..CurriculumConfig::default()
-    }
 }
 
 pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {

@@ -123,11 +123,7 @@ fn run_episodes(
     let sim_cfg = super::sim_config(a.sim_config.as_ref())?;
     let objects = sim_objects(&a.objects)?;
     let env_cfg = EnvConfig {
-        curriculum: CurriculumConfig {
-            enabled: false,
-            fixed_rate: a.difficulty,
-            ..CurriculumConfig::default()
-        },
+        curriculum: CurriculumConfig::fixed(a.difficulty),
         ..EnvConfig::default()
     };
     let pool = rayon::ThreadPoolBuilder::new()

@@ -39,6 +39,15 @@ impl Default for CurriculumConfig {
 pub const MAX_WINDOW: usize = 1_000_000;
 
 impl CurriculumConfig {
+    /// The curriculum off, at success rate `rate` (an evaluation's `--difficulty`).
+    pub fn fixed(rate: f64) -> Self {
+        CurriculumConfig {
+            enabled: false,
+            fixed_rate: rate,
+            ..CurriculumConfig::default()
+        }
+    }
+
     /// Checks the values; `Err` names the field (relative to `[env.curriculum]`) and says
     /// what is wrong. A window of 0 would never record an outcome and freeze the
     /// curriculum at its easiest level.
@@ -143,6 +152,14 @@ impl Curriculum {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_fixed_curriculum_is_off_at_its_rate() {
+        let c = CurriculumConfig::fixed(0.25);
+        assert!(!c.enabled);
+        assert_eq!(c.fixed_rate, 0.25);
+        assert_eq!(c.window, CurriculumConfig::default().window);
+    }
     use rand::SeedableRng;
 
     #[test]

@@ -192,14 +192,6 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
     let robot = Robot::builtin(Side::Left);
     let names: Vec<String> = setup.objects.iter().map(|o| o.0.clone()).collect();
     let sim = SimConfig::default();
-    let fixed = |env: EnvConfig| EnvConfig {
-        curriculum: crate::env::curriculum::CurriculumConfig {
-            enabled: false,
-            fixed_rate: 1.0,
-            ..Default::default()
-        },
-        ..env
-    };
     let baseline_model = crate::synergy::default_model()
         .truncated(5)
         .map_err(|e| EvalError::Agent(e.to_string()))?;
@@ -215,7 +207,10 @@ pub fn measure(setup: &RegressionSetup) -> Result<Figures, EvalError> {
         (
             AgentSpec::Baseline2,
             "baseline2".into(),
-            fixed(EnvConfig::default()),
+            EnvConfig {
+                curriculum: crate::env::curriculum::CurriculumConfig::fixed(1.0),
+                ..EnvConfig::default()
+            },
             &baseline_model,
         ),
         (
