@@ -88,8 +88,7 @@ impl TrainedAgent {
                 ),
             ));
         }
-        let setup = checkpoint_setup(dir)?;
-        let (env, n, trained_sim) = match setup.as_ref() {
+        let (env, n, trained_sim) = match checkpoint_setup(dir)? {
             Some(s) => {
                 // n synergies, the wrist's two increments and, with the grip, one more.
                 let expected = s.env.action.continuous(s.n_components);
@@ -109,7 +108,7 @@ impl TrainedAgent {
                         ),
                     ));
                 }
-                (s.env.clone(), s.n_components, Some(s.sim_config.clone()))
+                (s.env, s.n_components, Some(s.sim_config))
             }
             None => (
                 assumed.env.clone().unwrap_or_default(),
