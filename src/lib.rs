@@ -28,7 +28,8 @@
 //! - [`train`]: training runs (`grasp train` as a library): the run folder, metrics,
 //!   TensorBoard events, the learning-curve plot and the environments of a config.
 //! - [`run`]: grasp attempts on a hand-arm system: the simulator behind the hardware
-//!   interface, tactile calibration and the grasp pipeline of Sec. V-B.
+//!   interface, tactile calibration, the grasp pipeline of Sec. V-B and `grasp run` as one
+//!   request ([`run::request`]: checked, loaded and carried out here; the command prints).
 //! - `python` (feature `python`): the PyO3 module `grasp_rl._core`, a thin layer over
 //!   [`env`](mod@env) that the `grasp_rl` package (`python/`) exposes to gymnasium.
 

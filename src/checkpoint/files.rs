@@ -16,3 +16,11 @@ pub const EVENTS_SUFFIX: &str = ".grasp";
 /// The lock file: an exclusive OS lock on it is held while a process trains in the
 /// folder.
 pub const LOCK: &str = ".lock";
+
+/// The files of checkpoint folder `dir` that a command reads (the weights, `config.toml`,
+/// `synergy.json`): no output may replace them.
+pub fn read_by_commands(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    [crate::ppo::CHECKPOINT_FILE, CONFIG, SYNERGY]
+        .map(|f| dir.join(f))
+        .to_vec()
+}

@@ -204,7 +204,7 @@ fn run_attempts(a: BenchRunArgs, g: &Global) -> Result<()> {
                     &robot, &object, &agent, &cfg, r,
                 )?,
                 #[cfg(not(feature = "mujoco"))]
-                super::Backend::Mujoco => anyhow::bail!(super::NO_MUJOCO),
+                super::Backend::Mujoco => anyhow::bail!(grasp::run::request::NO_MUJOCO),
                 super::Backend::Ros => {
                     anyhow::bail!("--backend ros: the bench runs simulated robots (sim, mujoco)")
                 }

@@ -58,7 +58,7 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
         if let Some(p) = &a.sim_config {
             inputs.push(Named::new("--sim-config", p));
         }
-        let objects = super::object_files(&a.object);
+        let objects = grasp::objects::sets::files_read(&a.object);
         inputs.extend(objects.iter().map(|p| Named::new("--object", p)));
         check_outputs(&inputs, &[Named::new("--out", &a.out)], &[])?;
         // Checked before the presses: a calibration is not thrown away by its write.
@@ -79,7 +79,7 @@ pub fn run(a: CalibrateArgs, g: &Global) -> Result<()> {
         #[cfg(feature = "mujoco")]
         Backend::Mujoco => sim_calibrate::<grasp::run::mujoco_backend::MujocoHandArm>(&a, g)?,
         #[cfg(not(feature = "mujoco"))]
-        Backend::Mujoco => bail!(super::NO_MUJOCO),
+        Backend::Mujoco => bail!(grasp::run::request::NO_MUJOCO),
         Backend::Ros => ros_calibrate(&a)?,
     };
     report
@@ -157,5 +157,5 @@ fn ros_calibrate(a: &CalibrateArgs) -> Result<CalibrationReport> {
 
 #[cfg(not(feature = "ros"))]
 fn ros_calibrate(_a: &CalibrateArgs) -> Result<CalibrationReport> {
-    bail!(super::NO_ROS)
+    bail!(grasp::run::request::NO_ROS)
 }

@@ -380,7 +380,7 @@ fn check_overlaps(a: &EvalArgs) -> Result<()> {
         .collect();
     let ckpt: Vec<PathBuf> = dirs
         .iter()
-        .flat_map(|d| super::checkpoint_files(d))
+        .flat_map(|d| grasp::checkpoint::files::read_by_commands(d))
         .collect();
     let mut inputs: Vec<Named> = a
         .from_json
@@ -397,7 +397,7 @@ fn check_overlaps(a: &EvalArgs) -> Result<()> {
         }
     }
     let objects = if a.from_json.is_empty() {
-        super::object_files(&a.objects)
+        grasp::objects::sets::files_read(&a.objects)
     } else {
         Vec::new()
     };

@@ -75,34 +75,6 @@ impl RecordArgs {
     }
 }
 
-/// The files of the checkpoint folder `dir` that a command reads (weights, config.toml,
-/// synergy.json): no output may replace them.
-pub fn checkpoint_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
-    use grasp::checkpoint::files;
-    [grasp::ppo::CHECKPOINT_FILE, files::CONFIG, files::SYNERGY]
-        .map(|f| dir.join(f))
-        .to_vec()
-}
-
-/// The files an `--objects`-style argument reads: the manifest or mesh file it names and
-/// the mesh files of its objects (none for built-in sets and names): no output may
-/// replace them. An argument that does not resolve gives none (its error comes later).
-pub fn object_files(arg: &str) -> Vec<std::path::PathBuf> {
-    let mut files = Vec::new();
-    let p = std::path::Path::new(arg);
-    if p.is_file() {
-        files.push(p.to_path_buf());
-    }
-    if let Ok(specs) = grasp::objects::resolve_specs(arg) {
-        for s in specs {
-            if let grasp::objects::ShapeSpec::Mesh { path, .. } = s.spec.shape {
-                files.push(path);
-            }
-        }
-    }
-    files
-}
-
 /// Teach a Shadow hand on a UR10e arm to grasp unseen objects: hand synergies, a Rapier
 /// simulation with tactile and torque sensing, PPO with a GRU policy, evaluation, and
 /// execution on a real robot.
@@ -289,13 +261,10 @@ pub fn exit_interrupted(what: &str, quiet: bool) -> ! {
     std::process::exit(130);
 }
 
-/// Checks an `--attempts` flag: 1..=[`grasp::eval::MAX_ATTEMPTS`]; `what` says what one attempt is.
+/// Checks an `--attempts` flag ([`grasp::eval::check_attempts`]); `what` says what one
+/// attempt is.
 pub fn check_attempts(n: usize, what: &str) -> anyhow::Result<()> {
-    use grasp::eval::MAX_ATTEMPTS;
-    if n == 0 || n > MAX_ATTEMPTS {
-        anyhow::bail!("--attempts {n} must be in 1..={MAX_ATTEMPTS} ({what})");
-    }
-    Ok(())
+    grasp::eval::check_attempts(n, what).map_err(anyhow::Error::msg)
 }
 
 /// The simulator config of a `--sim-config`-style flag, by
@@ -361,20 +330,10 @@ pub fn load_synergy(
         .with_context(|| format!("using {n} synergy components"))
 }
 
-/// Resolves `--objects` into the simulator's object descriptions.
+/// Resolves `--objects` into the simulator's object descriptions
+/// ([`grasp::sim::ObjectSpec::simulable_set`]).
 pub fn sim_objects(arg: &str) -> anyhow::Result<Vec<(String, grasp::sim::ObjectSpec)>> {
-    let objects = load_objects(arg)?;
-    // Every object is checked before any episode runs, naming the set (the manifest, the
-    // folder) and the object.
-    objects
-        .iter()
-        .map(|o| {
-            let spec = grasp::sim::ObjectSpec::simulable(o)
-                .map_err(|e| anyhow::anyhow!(e))
-                .with_context(|| format!("objects `{arg}`"))?;
-            Ok((o.name.clone(), spec))
-        })
-        .collect()
+    Ok(grasp::sim::ObjectSpec::simulable_set(arg)?)
 }
 
 /// Number of worker threads: the `--threads` flag (checked by the one rule of
@@ -405,21 +364,21 @@ impl Backend {
     }
 }
 
-/// The object for the sim backend: `box`, `cylinder` or one library object.
+impl From<Backend> for grasp::run::request::RobotBackend {
+    fn from(b: Backend) -> Self {
+        use grasp::run::request::RobotBackend as R;
+        match b {
+            Backend::Sim => R::Sim,
+            Backend::Ros => R::Ros,
+            Backend::Mujoco => R::Mujoco,
+        }
+    }
+}
+
+/// The object for the sim backend: `box`, `cylinder` or one library object
+/// ([`grasp::sim::ObjectSpec::simulable_one`]).
 pub fn sim_object(name: &str) -> anyhow::Result<grasp::sim::ObjectSpec> {
-    match name.trim() {
-        "box" => return Ok(grasp::sim::ObjectSpec::default_box()),
-        "cylinder" => return Ok(grasp::sim::ObjectSpec::default_cylinder()),
-        _ => {}
-    }
-    let mut objs = sim_objects(name)?;
-    if objs.len() != 1 {
-        anyhow::bail!(
-            "--object `{name}` holds {} objects; it must name exactly one",
-            objs.len()
-        );
-    }
-    Ok(objs.remove(0).1)
+    Ok(grasp::sim::ObjectSpec::simulable_one(name)?)
 }
 
 /// The simulated hand-arm `A` with the raw-sensor model seeded by `seed`.
@@ -448,19 +407,10 @@ pub fn calibrate_sim<A: grasp::run::simulated::SimulatedArm>(
         .context("calibrating the simulated fingertips")
 }
 
-/// The error of `--backend ros` in a build without the `ros` feature.
-pub const NO_ROS: &str =
-    "the ros backend is not part of this build: rebuild with `cargo build --release --features ros`";
-
-/// The error of `--backend mujoco` in a build without the `mujoco` feature.
-#[cfg_attr(feature = "mujoco", allow(dead_code))]
-pub const NO_MUJOCO: &str = "the mujoco backend is not part of this build: rebuild with `cargo build --release --features mujoco` (see docs/robot-hardware.md)";
-
-/// Connects to the robot's rosbridge.
+/// Connects to the robot's rosbridge ([`grasp::run::request::connect_ros`]).
 #[cfg(feature = "ros")]
 pub fn connect_ros(url: &str) -> anyhow::Result<grasp::hardware::ros::RosHandArm> {
-    grasp::hardware::ros::RosHandArm::connect(url, grasp::hardware::ros::RosConfig::default())
-        .with_context(|| format!("connecting to rosbridge at {url}"))
+    Ok(grasp::run::request::connect_ros(url)?)
 }
 
 #[cfg(test)]

@@ -1,34 +1,14 @@
 //! `grasp run`: a grasp attempt of a trained policy on the simulated or the real robot
 //! (Sec. V-B): plan a two-finger grasp, map it to the hand, stage 1, the policy, the lift.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
-use grasp::hardware::calibration::TactileCalibration;
-use grasp::hardware::log::AttemptLog;
-use grasp::hardware::safety::SafeHandArm;
-use grasp::hardware::HandArm;
-use grasp::perception::pointcloud::{write_pcd, PcdData, PointCloud};
-use grasp::robot::{Robot, Side};
-use grasp::run::pipeline::{
-    load_grasp_file, AttemptOutcome, Controller, GraspFile, GraspPlan, GraspSource, PipelineConfig,
-    PolicyRunner,
-};
-use grasp::run::session::{
-    fit_to_simulator, object_cloud, plan_attempt, AttemptReport, Session, SessionConfig,
-};
-use grasp::run::sim_backend::{CameraConfig, SimBackendConfig, SimHandArm};
-use grasp::run::simulated::SimulatedArm;
-use grasp::run::table::{run_table, TableAgent, TableConfig};
-use grasp::sim::SimConfig;
-use grasp::util::{assets, signal};
-use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
+use grasp::run::request::{execute, GraspInput, RunAttempt, RunEvent, RunOutput, RunRequest};
+use grasp::util::signal;
+use std::path::PathBuf;
+use std::sync::OnceLock;
 
-use super::{sim_config, sim_object, sim_objects, threads, Backend, Global, NO_ROS};
-
-/// The attempt log of a single run when `--log` is not given.
-const DEFAULT_LOG: &str = "attempt.jsonl";
+use super::{Backend, Global};
 
 /// Run a grasp attempt of a trained policy on the simulated or the real robot (with
 /// --attempts, more after a failed lift: sim backend).
@@ -145,513 +125,183 @@ pub struct RunArgs {
     pub attempts: usize,
 }
 
-fn pipeline_config(a: &RunArgs, sim: Option<&SimConfig>) -> Result<PipelineConfig> {
-    let mut cfg: PipelineConfig = match &a.config {
-        Some(p) => grasp::util::config::load_toml(p)
-            .with_context(|| format!("loading pipeline config {}", p.display()))?,
-        None => PipelineConfig::default(),
+/// The library's request of these flags.
+fn request(a: &RunArgs, g: &Global) -> RunRequest {
+    let grasp = if let Some(p) = &a.grasp {
+        Some(GraspInput::File(p.clone()))
+    } else if let Some(p) = &a.cloud {
+        Some(GraspInput::Cloud(p.clone()))
+    } else if let (Some(center), Some(closing)) = (&a.center, &a.closing) {
+        Some(GraspInput::Given {
+            center: center.clone(),
+            closing: closing.clone(),
+            approach: a.approach.clone(),
+        })
+    } else {
+        None
     };
-    if let Some(s) = sim {
-        // The simulator's hand goes palm down only, acts for its control period and
-        // lifts as configured.
-        fit_to_simulator(&mut cfg, s);
+    RunRequest {
+        backend: a.backend.into(),
+        policy: a.policy.clone(),
+        grasp,
+        calibration: a.calibration.clone(),
+        object: a.object.clone(),
+        objects: a.objects.clone(),
+        trials: a.trials,
+        threads: a.threads,
+        log: a.log.clone(),
+        config: a.config.clone(),
+        sim_config: a.sim_config.clone(),
+        mujoco_settings: a.mujoco_settings.clone(),
+        save_cloud: a.save_cloud.clone(),
+        ros_url: a.ros_url.clone(),
+        attempts: a.attempts,
+        seed: g.seed.unwrap_or(0),
     }
-    cfg.validate().with_context(|| match &a.config {
-        Some(p) => format!("pipeline config {}", p.display()),
-        None => "pipeline config".into(),
-    })?;
-    Ok(cfg)
-}
-
-fn given_source(a: &RunArgs) -> Result<Option<GraspSource>> {
-    if let Some(p) = &a.grasp {
-        let g = load_grasp_file(p)?;
-        return Ok(Some(GraspSource::Given(g)));
-    }
-    if let Some(p) = &a.cloud {
-        let c =
-            PointCloud::load(p).with_context(|| format!("loading point cloud {}", p.display()))?;
-        return Ok(Some(GraspSource::Cloud(c.points)));
-    }
-    if let (Some(c), Some(cl)) = (&a.center, &a.closing) {
-        let v3 = |v: &Vec<f64>, name: &str| -> Result<[f64; 3]> {
-            match v.as_slice() {
-                &[x, y, z] => Ok([x, y, z]),
-                other => bail!(
-                    "--{name} takes three numbers x,y,z, got {}: {}",
-                    other.len(),
-                    v.iter()
-                        .map(|x| grasp::util::num::short(*x))
-                        .collect::<Vec<_>>()
-                        .join(",")
-                ),
-            }
-        };
-        let f = GraspFile {
-            center: v3(c, "center")?,
-            closing: v3(cl, "closing")?,
-            approach: match &a.approach {
-                Some(ap) => v3(ap, "approach")?,
-                None => [0.0, 0.0, -1.0],
-            },
-        };
-        return Ok(Some(GraspSource::Given(
-            f.grasp().context("the command-line grasp")?,
-        )));
-    }
-    Ok(None)
-}
-
-fn save_cloud(path: &Path, source: &GraspSource) -> Result<()> {
-    if let GraspSource::Cloud(points) = source {
-        write_pcd(path, points, PcdData::Ascii)
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
-    Ok(())
-}
-
-/// Refuses a `--log` or `--save-cloud` that is an input (the policies' files, `--grasp`,
-/// `--cloud`, `--calibration`, `--config`, `--sim-config`, the objects' files) or the
-/// other output.
-fn check_overlaps(a: &RunArgs, policies: &[PathBuf], log: Option<&Path>) -> Result<()> {
-    use grasp::util::fsx::{check_outputs, Named};
-    let mut inputs: Vec<Named> = Vec::new();
-    let ckpt: Vec<PathBuf> = policies
-        .iter()
-        .flat_map(|p| super::checkpoint_files(p))
-        .collect();
-    inputs.extend(ckpt.iter().map(|p| Named::new("--policy", p)));
-    for (flag, p) in [
-        ("--grasp", &a.grasp),
-        ("--cloud", &a.cloud),
-        ("--calibration", &a.calibration),
-        ("--config", &a.config),
-        ("--sim-config", &a.sim_config),
-    ] {
-        if let Some(p) = p {
-            inputs.push(Named::new(flag, p));
-        }
-    }
-    let (flag, arg) = match &a.objects {
-        Some(o) => ("--objects", o.as_str()),
-        None => ("--object", a.object.as_str()),
-    };
-    let objects = super::object_files(arg);
-    inputs.extend(objects.iter().map(|p| Named::new(flag, p)));
-    let mut outputs = Vec::new();
-    if let Some(p) = log {
-        outputs.push(Named::new("--log", p));
-    }
-    if let Some(p) = &a.save_cloud {
-        outputs.push(Named::new("--save-cloud", p));
-    }
-    check_outputs(&inputs, &outputs, &[])?;
-    Ok(())
 }
 
 pub fn run(a: RunArgs, g: &Global) -> Result<()> {
-    super::check_attempts(a.attempts, "grasp attempts on the object")?;
-    if let Some(p) = &a.mujoco_settings {
-        if a.backend != Backend::Mujoco {
-            bail!("--mujoco-settings is for --backend mujoco");
-        }
-        grasp::run::mjcf::MujocoSettings::load(p)
-            .and_then(|s| s.use_for_process())
-            .with_context(|| format!("--mujoco-settings {}", p.display()))?;
+    let req = request(&a, g);
+    if req.objects.is_some() {
+        // Installed before the table is announced: a signal from then on stops it cleanly.
+        signal::stop_on_signal(
+            "finishing the trials in progress, then printing the finished ones",
+            g.quiet,
+        )
+        .context("installing the Ctrl-C and SIGTERM handler")?;
     }
-    if a.objects.is_some() {
-        return match a.backend {
-            Backend::Sim => table::<SimHandArm>(&a, g),
-            #[cfg(feature = "mujoco")]
-            Backend::Mujoco => table::<grasp::run::mujoco_backend::MujocoHandArm>(&a, g),
-            #[cfg(not(feature = "mujoco"))]
-            Backend::Mujoco => bail!(super::NO_MUJOCO),
-            Backend::Ros => bail!(
-                "--objects runs every trial on a simulated robot: use --backend sim or mujoco"
-            ),
-        };
-    }
-    let log = a.log.clone().unwrap_or_else(|| PathBuf::from(DEFAULT_LOG));
-    let policy_arg = PathBuf::from(&a.policy);
-    check_overlaps(&a, std::slice::from_ref(&policy_arg), Some(&log))?;
-    let seed = g.seed.unwrap_or(0);
-    let robot = Robot::builtin(Side::Left);
-    let policy_dir = assets::default_or_given(&policy_arg, grasp::run::DEFAULT_POLICY, "--policy")?;
-    let mut policy = PolicyRunner::load(&policy_dir)
-        .with_context(|| format!("loading policy {}", policy_dir.display()))?;
-    let calibration = match &a.calibration {
-        Some(p) => Some(TactileCalibration::load(p)?),
-        None => None,
-    };
-    let source = given_source(&a)?;
-    if let Some(s) = &source {
-        grasp::run::plan::check_source(s)?;
-    }
-    let one = One {
-        a: &a,
-        g,
-        robot: &robot,
-        log: &log,
-        seed,
-    };
-    match a.backend {
-        Backend::Sim => one.sim::<SimHandArm>(&mut policy, calibration, source),
-        #[cfg(feature = "mujoco")]
-        Backend::Mujoco => {
-            one.sim::<grasp::run::mujoco_backend::MujocoHandArm>(&mut policy, calibration, source)
-        }
-        #[cfg(not(feature = "mujoco"))]
-        Backend::Mujoco => bail!(super::NO_MUJOCO),
-        Backend::Ros => {
-            if !cfg!(feature = "ros") {
-                bail!(NO_ROS);
-            }
-            let Some(calibration) = calibration else {
-                bail!("the ros backend needs --calibration FILE (make one with `grasp calibrate --backend ros --out FILE`)");
-            };
-            let Some(source) = source else {
-                bail!("the ros backend needs a grasp: --grasp FILE, --cloud FILE or --center/--closing");
-            };
-            if let Some(p) = &a.save_cloud {
-                save_cloud(p, &source)?;
-            }
-            if a.attempts > 1 {
-                bail!(
-                    "--attempts {}: the ros backend makes one attempt (a retry needs a new \
-                     cloud of where the object lies)",
-                    a.attempts
+    let bar = OnceLock::new();
+    let on_event = |e: RunEvent<'_>| match e {
+        RunEvent::TableStarts {
+            agents,
+            objects,
+            trials,
+            backend,
+        } => {
+            let total = (agents * objects * trials) as u64;
+            bar.get_or_init(|| progress_bar(total, !(g.quiet || g.json)));
+            if !g.quiet && !g.json {
+                eprintln!(
+                    "running {agents} agents on {objects} objects x {trials} trials through the {backend} robot ..."
                 );
             }
-            let cfg = pipeline_config(&a, None)?;
-            let plan = plan_attempt(
-                &robot,
-                &source,
-                &cfg,
-                &Controller::Policy(&mut policy),
-                seed,
-                &[],
-            )?;
-            policy.set_object_cloud(object_cloud(&source));
-            #[cfg(feature = "ros")]
-            {
-                let mut arm = safe_arm(super::connect_ros(&a.ros_url)?, &robot, &cfg)?;
-                let mut log = AttemptLog::open(&log)?;
-                let out = grasp::run::pipeline::run_attempt(
-                    &mut arm,
-                    &robot,
-                    &plan,
-                    &mut policy,
-                    &calibration,
-                    &cfg,
-                    &mut log,
-                )
-                .context("grasp attempt failed")?;
-                let report = one.report(&plan, &out, false, None);
-                print_reports(vec![report], g)?;
+        }
+        RunEvent::TrialDone => {
+            if let Some(b) = bar.get() {
+                b.inc(1);
             }
-            #[cfg(not(feature = "ros"))]
-            let _ = (plan, calibration, &one);
+        }
+        RunEvent::Attempt(r) => {
+            if !g.json {
+                print_attempt(r);
+            }
+        }
+    };
+    let out = execute(&req, &on_event, Some(&signal::STOP))?;
+    if let Some(b) = bar.get() {
+        b.finish_and_clear();
+    }
+    match out {
+        RunOutput::Attempts { attempts, stopped } => {
+            if let Some(why) = stopped.filter(|_| !g.quiet) {
+                eprintln!("{why}");
+            }
+            print_reports(attempts, g)
+        }
+        RunOutput::Table {
+            results,
+            interrupted,
+        } => {
+            if interrupted && results.is_empty() {
+                super::exit_interrupted(" before any trial finished: nothing to report", false);
+            }
+            if g.json {
+                println!("{}", serde_json::to_string_pretty(&results)?);
+            } else {
+                print_table(&results);
+            }
+            if let Some(p) = a.log.as_ref().filter(|_| !g.json) {
+                eprintln!("attempt logs appended to {}", p.display());
+            }
+            if interrupted {
+                super::exit_interrupted(
+                    ": the results above are of the trials that finished",
+                    g.quiet,
+                );
+            }
             Ok(())
         }
     }
 }
 
-/// What one `grasp run` (no --objects) prints its attempts with.
-struct One<'a> {
-    a: &'a RunArgs,
-    g: &'a Global,
-    robot: &'a Robot,
-    log: &'a Path,
-    seed: u64,
-}
-
-impl One<'_> {
-    /// A session on the simulated backend `A`: the library's set-up, calibration,
-    /// cameras and attempts, each attempt printed as it ends.
-    fn sim<A: SimulatedArm>(
-        &self,
-        policy: &mut PolicyRunner,
-        calibration: Option<TactileCalibration>,
-        source: Option<GraspSource>,
-    ) -> Result<()> {
-        let (a, g) = (self.a, self.g);
-        let sim_cfg = sim_config(a.sim_config.as_ref())?;
-        let cfg = pipeline_config(a, Some(&sim_cfg))?;
-        let object = sim_object(&a.object)?;
-        if a.attempts > 1 && source.is_some() {
-            bail!(
-                "--attempts {} plans each attempt on the simulated cameras' cloud: drop \
-                 --grasp, --cloud and --center",
-                a.attempts
-            );
-        }
-        let mut backend = SimBackendConfig::default();
-        backend.raw.seed = self.seed;
-        let mut session = Session::<A>::start(
-            self.robot,
-            object,
-            sim_cfg,
-            SessionConfig {
-                pipeline: cfg,
-                backend,
-                calibration,
-                source,
-                cameras: CameraConfig::default(),
-                seed: self.seed,
-                attempts: a.attempts,
-            },
-        )?;
-        if let Some(p) = &a.save_cloud {
-            save_cloud(p, session.source())?;
-        }
-        let calibrated_now = session.calibrated_now();
-        let mut log = AttemptLog::open(self.log)?;
-        let mut reports = Vec::new();
-        let numbered = a.attempts > 1;
-        let out = session.run(
-            self.robot,
-            &mut Controller::Policy(policy),
-            &mut log,
-            |r: &AttemptReport| {
-                let number = numbered.then_some(r.number);
-                reports.push(self.report(&r.plan, &r.outcome, calibrated_now, number));
-            },
-        )?;
-        if let Some((k, e)) = &out.stopped {
-            if !g.quiet {
-                eprintln!("no attempt {k}: {e}");
-            }
-        }
-        print_reports(reports, g)
+/// Prints one attempt's text report.
+fn print_attempt(r: &RunAttempt) {
+    let (plan, out) = (&r.plan, &r.outcome);
+    if let Some(n) = r.number {
+        println!("attempt {n}:");
     }
-
-    /// Prints one attempt's text report (unless `--json`) and returns its JSON report.
-    fn report(
-        &self,
-        plan: &GraspPlan,
-        out: &AttemptOutcome,
-        calibrated_now: bool,
-        number: Option<usize>,
-    ) -> serde_json::Value {
-        let a = self.a;
-        let simulated = a.backend != Backend::Ros;
-        let report = serde_json::json!({
-            "backend": a.backend.name(),
-            "policy": a.policy,
-            "object": simulated.then_some(&a.object),
-            "calibrated_now": calibrated_now,
-            "plan": plan,
-            "outcome": out,
-            "log": self.log,
-        });
-        if !self.g.json {
-            if let Some(n) = number {
-                println!("attempt {n}:");
-            }
-            let where_ = if simulated {
-                format!(" on {}", a.object)
-            } else {
-                String::new()
-            };
-            println!(
-                "grasp at ({:.3}, {:.3}, {:.3}) m, closing ({:.2}, {:.2}, {:.2}){}",
-                plan.center[0],
-                plan.center[1],
-                plan.center[2],
-                plan.closing[0],
-                plan.closing[1],
-                plan.closing[2],
-                match plan.score {
-                    Some(s) => format!(
-                        ", score {s:.3} (best reachable of {} candidates)",
-                        plan.candidates
-                    ),
-                    None if plan.fallback => format!(
-                        ", across the cloud's narrow axis (no usable antipodal candidate of {})",
-                        plan.candidates
-                    ),
-                    None => String::new(),
-                }
-            );
-            println!(
-                "stage 1: {} updates, {}; policy: {} steps, {}; {} clamped commands",
-                out.stage1_updates,
-                if out.touched { "touched" } else { "no touch" },
-                out.policy_steps,
-                if out.lifted { "lifted" } else { "no lift" },
-                out.clamped_commands
-            );
-            println!(
-                "{}{}: {} ({}; judged by the {}), {:.2} s, {} log lines in {}",
-                if out.success { "SUCCESS" } else { "FAILURE" },
-                where_,
-                out.reason,
-                if calibrated_now {
-                    "calibrated now"
-                } else {
-                    "calibration file"
-                },
-                out.judged_by,
-                out.time_s,
-                out.log_lines,
-                self.log.display()
-            );
+    let where_ = match &r.object {
+        Some(o) => format!(" on {o}"),
+        None => String::new(),
+    };
+    println!(
+        "grasp at ({:.3}, {:.3}, {:.3}) m, closing ({:.2}, {:.2}, {:.2}){}",
+        plan.center[0],
+        plan.center[1],
+        plan.center[2],
+        plan.closing[0],
+        plan.closing[1],
+        plan.closing[2],
+        match plan.score {
+            Some(s) => format!(
+                ", score {s:.3} (best reachable of {} candidates)",
+                plan.candidates
+            ),
+            None if plan.fallback => format!(
+                ", across the cloud's narrow axis (no usable antipodal candidate of {})",
+                plan.candidates
+            ),
+            None => String::new(),
         }
-        report
-    }
-}
-
-/// `backend` behind the safety layer: joint limits, rate limits, the sensor watchdog.
-#[cfg_attr(not(feature = "ros"), allow(dead_code))]
-fn safe_arm<B: HandArm>(backend: B, robot: &Robot, cfg: &PipelineConfig) -> Result<SafeHandArm<B>> {
-    Ok(SafeHandArm::new(
-        backend,
-        robot.hand_limits(),
-        cfg.safety,
-        Arc::new(AtomicBool::new(false)),
-    )?)
+    );
+    println!(
+        "stage 1: {} updates, {}; policy: {} steps, {}; {} clamped commands",
+        out.stage1_updates,
+        if out.touched { "touched" } else { "no touch" },
+        out.policy_steps,
+        if out.lifted { "lifted" } else { "no lift" },
+        out.clamped_commands
+    );
+    println!(
+        "{}{}: {} ({}; judged by the {}), {:.2} s, {} log lines in {}",
+        if out.success { "SUCCESS" } else { "FAILURE" },
+        where_,
+        out.reason,
+        if r.calibrated_now {
+            "calibrated now"
+        } else {
+            "calibration file"
+        },
+        out.judged_by,
+        out.time_s,
+        out.log_lines,
+        r.log.display()
+    );
 }
 
 /// With `--json`: one attempt's report as it is, several as `{"attempts": [...],
 /// "success": ...}`.
-fn print_reports(mut reports: Vec<serde_json::Value>, g: &Global) -> Result<()> {
+fn print_reports(mut reports: Vec<RunAttempt>, g: &Global) -> Result<()> {
     if !g.json {
         return Ok(());
     }
     let j = if reports.len() == 1 {
-        reports.remove(0)
+        serde_json::to_value(reports.remove(0))?
     } else {
-        let success = reports
-            .last()
-            .is_some_and(|r| r["outcome"]["success"] == serde_json::Value::Bool(true));
+        let success = reports.last().is_some_and(|r| r.outcome.success);
         serde_json::json!({ "attempts": reports, "success": success })
     };
     println!("{}", serde_json::to_string_pretty(&j)?);
-    Ok(())
-}
-
-/// The agents of `--policy` with `--objects`: `baseline1`, `baseline2` or a checkpoint
-/// folder (the shipped default found from any working directory), named as given.
-fn table_agents(arg: &str) -> Result<Vec<TableAgent>> {
-    let names: Vec<&str> = arg.split(',').map(str::trim).collect();
-    if names.iter().any(|n| n.is_empty()) {
-        bail!("--policy `{arg}`: an empty agent name in the list");
-    }
-    if let Some(n) = grasp::util::seq::first_repeat(&names) {
-        bail!("--policy `{arg}`: `{n}` is listed twice");
-    }
-    names
-        .iter()
-        .map(|&n| {
-            Ok(match n {
-                "baseline1" => TableAgent::Baseline1,
-                "baseline2" => TableAgent::Baseline2,
-                path => TableAgent::Policy {
-                    dir: assets::default_or_given(
-                        Path::new(path),
-                        grasp::run::DEFAULT_POLICY,
-                        "--policy",
-                    )?,
-                    label: path.to_string(),
-                },
-            })
-        })
-        .collect()
-}
-
-/// Table I through the robot path on the simulated backend `A` (`--objects`).
-fn table<A: SimulatedArm>(a: &RunArgs, g: &Global) -> Result<()> {
-    let objects_arg = a.objects.as_deref().unwrap_or_default();
-    if a.attempts > 1 {
-        bail!(
-            "--attempts {} with --objects: a table makes one attempt per trial (the paper's \
-             protocol)",
-            a.attempts
-        );
-    }
-    if a.trials == 0 || a.trials > grasp::eval::MAX_TRIALS {
-        bail!(
-            "--trials {} must be in 1..={}",
-            a.trials,
-            grasp::eval::MAX_TRIALS
-        );
-    }
-    let agents = table_agents(&a.policy)?;
-    let dirs: Vec<PathBuf> = agents
-        .iter()
-        .filter_map(|ag| match ag {
-            TableAgent::Policy { dir, .. } => Some(dir.clone()),
-            _ => None,
-        })
-        .collect();
-    check_overlaps(a, &dirs, a.log.as_deref())?;
-    let calibration = match &a.calibration {
-        Some(p) => Some(TactileCalibration::load(p)?),
-        None => None,
-    };
-    let sim_cfg = sim_config(a.sim_config.as_ref())?;
-    let pipeline = pipeline_config(a, Some(&sim_cfg))?;
-    let objects = sim_objects(objects_arg)?;
-    let cfg = TableConfig {
-        trials: a.trials,
-        seed: g.seed.unwrap_or(0),
-        threads: threads(a.threads)?,
-        sim: sim_cfg,
-        pipeline,
-        backend: SimBackendConfig::default(),
-        cameras: CameraConfig::default(),
-        calibration,
-    };
-    let total = (agents.len() * objects.len() * a.trials) as u64;
-    let bar = progress_bar(total, !(g.quiet || g.json));
-    // Installed before the table is announced: a signal from then on stops it cleanly.
-    signal::stop_on_signal(
-        "finishing the trials in progress, then printing the finished ones",
-        g.quiet,
-    )
-    .context("installing the Ctrl-C and SIGTERM handler")?;
-    if !g.quiet && !g.json {
-        eprintln!(
-            "running {} agents on {} objects x {} trials through the {} robot ...",
-            agents.len(),
-            objects.len(),
-            a.trials,
-            A::NAME
-        );
-    }
-    let robot = Robot::builtin(Side::Left);
-    let tick = || bar.inc(1);
-    let mut results = run_table::<A>(
-        &robot,
-        &objects,
-        &agents,
-        &cfg,
-        a.log.as_deref(),
-        &tick,
-        Some(&signal::STOP),
-    )
-    .context("running the table")?;
-    bar.finish_and_clear();
-    let interrupted = signal::stopped();
-    // An agent none of whose trials finished before a signal has nothing to report.
-    results.retain(|r| !r.result.objects.is_empty());
-    if interrupted && results.is_empty() {
-        super::exit_interrupted(" before any trial finished: nothing to report", false);
-    }
-    if g.json {
-        println!("{}", serde_json::to_string_pretty(&results)?);
-    } else {
-        print_table(&results);
-    }
-    if let Some(p) = a.log.as_ref().filter(|_| !g.json) {
-        eprintln!("attempt logs appended to {}", p.display());
-    }
-    if interrupted {
-        super::exit_interrupted(
-            ": the results above are of the trials that finished",
-            g.quiet,
-        );
-    }
     Ok(())
 }
 

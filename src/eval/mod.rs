@@ -56,6 +56,16 @@ pub const MAX_TRIALS: usize = 10_000;
 /// Most attempts per trial (`grasp eval --attempts`, `grasp run --attempts`).
 pub const MAX_ATTEMPTS: usize = 10;
 
+/// Checks an `--attempts` flag: 1..=[`MAX_ATTEMPTS`]; `what` says what one attempt is.
+pub fn check_attempts(n: usize, what: &str) -> Result<(), String> {
+    if n == 0 || n > MAX_ATTEMPTS {
+        return Err(format!(
+            "--attempts {n} must be in 1..={MAX_ATTEMPTS} ({what})"
+        ));
+    }
+    Ok(())
+}
+
 /// Wilson score interval for `k` successes in `n` trials at 95 % (z = 1.96): (low, high).
 /// `n = 0` gives (0, 1).
 pub fn wilson(k: usize, n: usize) -> (f64, f64) {

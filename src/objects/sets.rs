@@ -156,6 +156,25 @@ fn check_unique(specs: &[ResolvedSpec], source: &str) -> Result<(), ObjectError>
     Ok(())
 }
 
+/// The files an `--objects`-style argument reads: the manifest or mesh file it names and
+/// the mesh files of its objects (none for built-in sets and names): no output may
+/// replace them. An argument that does not resolve gives none (its error comes later).
+pub fn files_read(arg: &str) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    let p = std::path::Path::new(arg);
+    if p.is_file() {
+        files.push(p.to_path_buf());
+    }
+    if let Ok(specs) = resolve_specs(arg) {
+        for s in specs {
+            if let crate::objects::ShapeSpec::Mesh { path, .. } = s.spec.shape {
+                files.push(path);
+            }
+        }
+    }
+    files
+}
+
 /// Resolves an `--objects` argument (see the module docs) into validated specs.
 pub fn resolve_specs(arg: &str) -> Result<Vec<ResolvedSpec>, ObjectError> {
     let arg = arg.trim();

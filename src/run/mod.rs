@@ -17,6 +17,8 @@
 //!   point cloud, the hand mapping, UR10e IK) and the attempt (stage 1, the policy, the
 //!   lift), logged step by step; the scripted baselines in place of stage 1 and the
 //!   policy ([`Controller`](pipeline::Controller)).
+//! - [`request`]: `grasp run` as one request ([`RunRequest`](request::RunRequest)):
+//!   checked, loaded and carried out here; the command prints what it reports.
 //! - [`session`]: `grasp run` on a simulated backend: set-up, calibration, cameras and
 //!   the attempt-and-retry loop, generic over [`SimulatedArm`](simulated::SimulatedArm).
 //! - [`table`]: Table I through the robot path: agents times objects times trials, each
@@ -46,6 +48,7 @@ pub mod mujoco_backend;
 pub mod pipeline;
 pub mod plan;
 pub mod raw_model;
+pub mod request;
 pub mod session;
 pub mod sim_backend;
 pub mod simulated;

@@ -49,7 +49,7 @@ pub mod settle;
 pub mod world;
 
 pub use config::SimConfig;
-pub use object::{ConvexParts, ObjectShape, ObjectSpec};
+pub use object::{ConvexParts, ObjectSetError, ObjectShape, ObjectSpec};
 pub use sensors::Sensors;
 pub use world::{
     CriticGeometry, FailureReport, HandSim, LiftOutcome, ObjectContact, PhysicsFailure, Scene,

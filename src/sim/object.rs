@@ -37,6 +37,36 @@ use rapier3d::prelude::{ColliderBuilder, MassProperties, Pose, SharedShape, Vect
 use serde::Serialize;
 use std::sync::Arc;
 
+/// Error of [`ObjectSpec::simulable_set`] and [`ObjectSpec::simulable_one`].
+#[derive(Debug, thiserror::Error)]
+pub enum ObjectSetError {
+    /// The argument names no objects, or they cannot be built.
+    #[error("cannot load objects `{arg}`")]
+    Load {
+        /// The argument.
+        arg: String,
+        /// Why.
+        #[source]
+        source: LibraryError,
+    },
+    /// An object of the set cannot be simulated.
+    #[error("objects `{arg}`: {detail}")]
+    NotSimulable {
+        /// The argument.
+        arg: String,
+        /// The object and why.
+        detail: String,
+    },
+    /// An `--object` argument that holds several objects or none.
+    #[error("--object `{name}` holds {count} objects; it must name exactly one")]
+    NotOne {
+        /// The argument.
+        name: String,
+        /// Its objects.
+        count: usize,
+    },
+}
+
 /// Error of an invalid object description.
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[error("object: field '{field}' = {value}: {message}")]
@@ -469,6 +499,49 @@ impl ObjectSpec {
         spec.validate()
             .map_err(|e| format!("object '{}' cannot be simulated: {e}", object.name))?;
         Ok(spec)
+    }
+
+    /// The objects of an `--objects`-style argument (a set name, a manifest, a mesh or a
+    /// comma list; [`crate::objects::sets::load_objects`], hulls from the cache), each
+    /// [`ObjectSpec::simulable`] and named: every object is checked before any episode
+    /// runs, the error naming the argument and the object.
+    pub fn simulable_set(arg: &str) -> Result<Vec<(String, ObjectSpec)>, ObjectSetError> {
+        let ctx = crate::objects::BuildContext::from_env();
+        let objects = crate::objects::sets::load_objects(arg, &ctx).map_err(|source| {
+            ObjectSetError::Load {
+                arg: arg.to_string(),
+                source,
+            }
+        })?;
+        objects
+            .iter()
+            .map(|o| {
+                let spec =
+                    ObjectSpec::simulable(o).map_err(|detail| ObjectSetError::NotSimulable {
+                        arg: arg.to_string(),
+                        detail,
+                    })?;
+                Ok((o.name.clone(), spec))
+            })
+            .collect()
+    }
+
+    /// The one object of an `--object`-style argument: `box`, `cylinder` or an argument
+    /// of [`ObjectSpec::simulable_set`] that holds exactly one object.
+    pub fn simulable_one(name: &str) -> Result<ObjectSpec, ObjectSetError> {
+        match name.trim() {
+            "box" => return Ok(ObjectSpec::default_box()),
+            "cylinder" => return Ok(ObjectSpec::default_cylinder()),
+            _ => {}
+        }
+        let mut objs = ObjectSpec::simulable_set(name)?;
+        if objs.len() != 1 {
+            return Err(ObjectSetError::NotOne {
+                name: name.to_string(),
+                count: objs.len(),
+            });
+        }
+        Ok(objs.remove(0).1)
     }
 
     /// Height of the body origin above the table when the object rests upright (m).
