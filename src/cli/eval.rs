@@ -2,30 +2,20 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use grasp::checkpoint::{Assumed, TrainedAgent};
-use grasp::env::curriculum::CurriculumConfig;
-use grasp::env::grasp::{EnvConfig, GraspEnv, GraspEnvError};
 use grasp::env::obs::Modality;
-use grasp::eval::conditions::EvalConditions;
 use grasp::eval::plot::{check_plot_path, write_per_object_plot};
 use grasp::eval::rank::MAX_RANK_TOP;
-use grasp::eval::record::{agent_file_name, RecordOptions};
+use grasp::eval::record::RecordOptions;
+use grasp::eval::request::{EvalEvent, EvalRequest};
 use grasp::eval::{
-    csv_table, evaluate_until, markdown_table, paired_lines, paired_with_first, physics_line,
-    read_results, text_table, unpaired_lines, AgentResult, AgentSpec, CountedPregrasp, EvalAgent,
-    PregraspStats, RankStats, RankedPregrasp, TrialPlan,
+    csv_table, markdown_table, paired_lines, paired_with_first, physics_line, read_results,
+    text_table, unpaired_lines, AgentResult,
 };
-use grasp::perception::pregrasp::{AntipodalPregrasp, PregraspPlanner};
-use grasp::robot::{Robot, Side};
-use grasp::sim::SimConfig;
 use grasp::util::fsx::{check_writable_file, write_atomic};
 use grasp::util::signal;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::path::PathBuf;
 
 use super::Global;
-use super::{load_synergy, sim_objects, threads};
 
 /// Evaluate agents per object on identical initial poses and print a Table-I-style table.
 #[derive(Debug, Args)]
@@ -146,136 +136,8 @@ pub enum Placement {
     Antipodal,
 }
 
-/// A placement's name as `--pregrasp` spells it.
-fn placement_name(p: Placement) -> String {
-    use clap::ValueEnum;
-    p.to_possible_value()
-        .map_or_else(|| format!("{p:?}"), |v| v.get_name().to_string())
-}
-
-/// The agent named by one `--policy` value; checkpoints act by sampling when `stochastic`.
-fn agent_spec(s: &str, stochastic: bool) -> Result<AgentSpec> {
-    Ok(match s {
-        "baseline1" => AgentSpec::Baseline1,
-        "baseline2" => AgentSpec::Baseline2,
-        path => {
-            let p = PathBuf::from(path);
-            if !p.join(grasp::ppo::CHECKPOINT_FILE).is_file() {
-                bail!(
-                    "unknown policy '{path}': expected baseline1, baseline2 or a checkpoint folder containing {}",
-                    grasp::ppo::CHECKPOINT_FILE
-                );
-            }
-            AgentSpec::learned(p, stochastic)
-        }
-    })
-}
-
-/// The environment settings and synergy model of one agent.
-struct AgentEnv {
-    spec: AgentSpec,
-    env: EnvConfig,
-    model: grasp::synergy::SynergyModel,
-    /// The simulator config the checkpoint was trained with (`None` for baselines and
-    /// checkpoints without a config.toml); `Some(None)`: the built-in one.
-    trained_sim: Option<Option<PathBuf>>,
-    /// A checkpoint's loaded network.
-    network: Option<Arc<grasp::ppo::LoadedPolicy>>,
-}
-
-/// The simulator config every agent is evaluated in
-/// ([`grasp::eval::physics::common_sim_config`]: `--sim-config`, else the checkpoints'
-/// own, else the built-in one).
-fn eval_sim_config(flag: Option<&PathBuf>, agents: &[AgentEnv], g: &Global) -> Result<SimConfig> {
-    let flag = match flag {
-        Some(p) => Some((p.as_path(), super::sim_config(Some(p))?)),
-        None => None,
-    };
-    let trained: Vec<(&Path, Option<&Path>)> = agents
-        .iter()
-        .filter_map(|ag| Some((ag.spec.checkpoint()?, ag.trained_sim.as_ref()?.as_deref())))
-        .collect();
-    let (cfg, note) = grasp::eval::physics::common_sim_config(flag, &trained, &mut |m| {
-        if !g.quiet {
-            eprintln!("warning: {m}");
-        }
-    })?;
-    if let Some(n) = note.filter(|_| !g.quiet) {
-        eprintln!("{n}");
-    }
-    Ok(cfg)
-}
-
-/// Resolves each agent's environment: checkpoints from their own config.toml
-/// ([`TrainedAgent`]), baselines (and checkpoints without one) from the flags.
-fn agent_envs(a: &EvalArgs, specs: Vec<AgentSpec>, g: &Global) -> Result<Vec<AgentEnv>> {
-    let flag_env = EnvConfig {
-        modality: a.modality.unwrap_or(Modality::M3),
-        ..EnvConfig::default()
-    };
-    let flag_components = a.components.unwrap_or(5);
-    let warn = |m: String| {
-        if !g.quiet {
-            eprintln!("warning: {m}");
-        }
-    };
-    specs
-        .into_iter()
-        .map(|spec| {
-            let Some(dir) = spec.checkpoint() else {
-                let mut env = flag_env.clone();
-                env.curriculum = CurriculumConfig::fixed(a.difficulty);
-                return Ok(AgentEnv {
-                    spec,
-                    env,
-                    model: load_synergy(a.synergy.as_ref(), flag_components)?,
-                    trained_sim: None,
-                    network: None,
-                });
-            };
-            let assumed = Assumed {
-                env: Some(flag_env.clone()),
-                n_components: Some(flag_components),
-                synergy: a.synergy.clone(),
-            };
-            let mut agent = TrainedAgent::load_assuming(dir, &assumed)
-                .with_context(|| format!("loading checkpoint {}", dir.display()))?;
-            if !agent.has_config() {
-                warn(format!(
-                    "{} has no config.toml; using --modality/--components",
-                    dir.display()
-                ));
-            }
-            agent.check_flags(a.modality, a.components)?;
-            if agent.has_synergy_file() {
-                if a.synergy.is_some() && agent.has_config() {
-                    warn(format!(
-                        "{} uses the synergy.json saved beside it, not --synergy",
-                        dir.display()
-                    ));
-                }
-            } else if agent.has_config() {
-                warn(format!(
-                    "{} has no synergy.json; its policy acts in {}",
-                    dir.display(),
-                    a.synergy.as_ref().map_or_else(
-                        || "the shipped synergy model (assets/synergy/model.json)".to_string(),
-                        |p| format!("--synergy {}", p.display())
-                    )
-                ));
-            }
-            agent.at_difficulty(a.difficulty);
-            Ok(AgentEnv {
-                env: agent.env.clone(),
-                model: agent.synergy().clone(),
-                trained_sim: agent.trained_sim_path().map(|p| p.map(Path::to_path_buf)),
-                network: Some(agent.network().clone()),
-                spec,
-            })
-        })
-        .collect()
-}
-
+/// Runs the evaluation the flags describe, or reads an earlier one's results, and prints
+/// and writes them.
 pub fn run(mut a: EvalArgs, g: &Global) -> Result<()> {
     // Every output is checked before the first episode, so that no evaluation is thrown
     // away by a write bound to fail.
@@ -499,7 +361,6 @@ fn saved(a: &EvalArgs, files: &[PathBuf]) -> Result<Vec<AgentResult>> {
         .collect()
 }
 
-/// Runs the evaluation the flags describe.
 /// Checks the flags that need no file: `--trials`, `--difficulty`, the recording flags.
 fn check_flags(a: &EvalArgs) -> Result<()> {
     use grasp::eval::MAX_TRIALS;
@@ -543,230 +404,54 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
     a.rec.check()
 }
 
-/// Each agent's recordings are named after it (its --labels entry where given): two
-/// agents of one name would overwrite each other's files, which is an error.
-fn recording_names(
-    a: &EvalArgs,
-    agents: &[AgentEnv],
-    record: Option<&RecordOptions>,
-    objects: &[String],
-) -> Result<Vec<String>> {
-    let rec_names: Vec<String> = agents
-        .iter()
-        .enumerate()
-        .map(|(i, ag)| a.labels.get(i).cloned().unwrap_or_else(|| ag.spec.label()))
-        .collect();
-    if let Some(r) = record {
-        for (i, n) in rec_names.iter().enumerate() {
-            let file = agent_file_name(n);
-            if let Some(j) = (0..i).find(|&j| agent_file_name(&rec_names[j]) == file) {
-                bail!(
-                    "--record {}: agents '{}' and '{n}' would both be recorded as \
-                     '{file}_<object>_<trial>' and overwrite each other: name them apart \
-                     with --labels",
-                    r.dir.display(),
-                    rec_names[j]
-                );
-            }
-        }
-        grasp::eval::record::check_file_names(&rec_names, objects).map_err(|e| {
-            anyhow::anyhow!(
-                "--record {}: {e}: name the agents apart with --labels",
-                r.dir.display()
-            )
-        })?;
-    }
-    Ok(rec_names)
-}
-
-/// The critic that ranks the planner's placements (`--rank-top` above 1): its
-/// checkpoint, network and setup.
-struct Ranker {
-    dir: PathBuf,
-    critic: Arc<grasp::ppo::LoadedPolicy>,
-    env: AgentEnv,
-}
-
-/// The ranker `a` asks for: `--ranker`, else the first checkpoint of `--policy`, in its
-/// own setup (perturbed as the agents are); `None` with `--rank-top 1`.
-fn ranker(
-    a: &EvalArgs,
-    agents: &[AgentEnv],
-    conditions: Option<&EvalConditions>,
-    g: &Global,
-) -> Result<Option<Ranker>> {
-    if a.rank_top < 2 {
-        return Ok(None);
-    }
-    if conditions.is_some_and(|c| c.randomization.enabled) {
-        bail!(
-            "--rank-top {} with --perturb's [randomization]: the ranker's probes would close \
-             on the nominal object, not the episode's randomised one; rank without it",
-            a.rank_top
-        );
-    }
-    let dir = match &a.ranker {
-        Some(d) => d.clone(),
-        None => agents
-            .iter()
-            .find_map(|ag| ag.spec.checkpoint().map(Path::to_path_buf))
-            .with_context(|| {
-                format!(
-                    "--rank-top {} needs a critic to rank with: give --ranker CHECKPOINT or a \
-                     checkpoint in --policy",
-                    a.rank_top
-                )
-            })?,
-    };
-    let mut env = agent_envs(a, vec![AgentSpec::learned(dir.clone(), false)], g)?
-        .pop()
-        .context("the ranker's setup")?;
-    if let Some(c) = conditions {
-        c.apply(&mut env.env);
-    }
-    let critic = env.network.clone().context("the ranker's network")?;
-    Ok(Some(Ranker { dir, critic, env }))
-}
-
+/// Evaluates the agents the flags name ([`grasp::eval::request::measure`]), saying its
+/// warnings and progress on stderr unless `--quiet`; a SIGINT or SIGTERM starts no new
+/// trial.
 fn measure(a: &EvalArgs, g: &Global) -> Result<Vec<AgentResult>> {
     check_flags(a)?;
-    let specs = a
-        .policy
-        .iter()
-        .map(|s| agent_spec(s, a.stochastic))
-        .collect::<Result<Vec<_>>>()?;
-    let robot = Robot::builtin(Side::Left);
-    let objects = sim_objects(&a.objects)?;
-    let names: Vec<String> = objects.iter().map(|o| o.0.clone()).collect();
-    let mut agents = agent_envs(a, specs, g)?;
-    let conditions = match &a.perturb {
-        Some(p) => Some(EvalConditions::load(p)?),
-        None => None,
+    let req = EvalRequest {
+        policy: a.policy.clone(),
+        stochastic: a.stochastic,
+        objects: a.objects.clone(),
+        trials: a.trials,
+        attempts: a.attempts,
+        synergy: a.synergy.clone(),
+        components: a.components,
+        modality: a.modality,
+        difficulty: a.difficulty,
+        sim_config: a.sim_config.clone(),
+        threads: a.threads,
+        pregrasp: match a.pregrasp {
+            Placement::TopDown => grasp::eval::request::Placement::TopDown,
+            Placement::Antipodal => grasp::eval::request::Placement::Antipodal,
+        },
+        perturb: a.perturb.clone(),
+        rank_top: a.rank_top,
+        ranker: a.ranker.clone(),
+        record: a.rec.record.as_ref().map(|dir| RecordOptions {
+            dir: dir.clone(),
+            every: a.rec.record_every,
+            only_failures: a.rec.record_failures,
+            name: None,
+        }),
+        labels: a.labels.clone(),
+        seed: g.seed.unwrap_or(0),
     };
-    if let Some(c) = &conditions {
-        for ag in &mut agents {
-            c.apply(&mut ag.env);
-        }
-    }
-    let sim_cfg = eval_sim_config(a.sim_config.as_ref(), &agents, g)?;
-    // The environment of agent `ag` (or of the ranker) on object `o` alone.
-    let env_on = |ag: &AgentEnv, o: usize| {
-        GraspEnv::new(
-            &robot,
-            vec![objects[o].clone()],
-            ag.model.clone(),
-            sim_cfg.clone(),
-            ag.env.clone(),
-        )
-    };
-    let ranker = ranker(a, &agents, conditions.as_ref(), g)?;
-    let record = a.rec.record.as_ref().map(|dir| RecordOptions {
-        dir: dir.clone(),
-        every: a.rec.record_every,
-        only_failures: a.rec.record_failures,
-        name: None,
-    });
-    let rec_names = recording_names(a, &agents, record.as_ref(), &names)?;
-    let seed = g.seed.unwrap_or(0);
-    let n_threads = threads(a.threads)?;
     signal::stop_on_signal(
         "finishing the trials in progress, then printing and writing the finished ones",
         g.quiet,
     )
     .context("installing the Ctrl-C and SIGTERM handler")?;
-    let mut results = Vec::new();
-    for (i, ag) in agents.iter().enumerate() {
-        let record = record.as_ref().map(|r| RecordOptions {
-            name: Some(rec_names[i].clone()),
-            ..r.clone()
-        });
-        let counts: Arc<[AtomicUsize; 2]> = Arc::new(Default::default());
-        let chosen = RankedPregrasp::tally(a.rank_top);
-        let make_env = |o: usize| {
-            let env = env_on(ag, o)?;
-            let inner: Box<dyn PregraspPlanner> = match &ranker {
-                None => Box::new(AntipodalPregrasp::default()),
-                Some(r) => Box::new(RankedPregrasp::new(
-                    AntipodalPregrasp::default(),
-                    a.rank_top,
-                    env_on(&r.env, o)?,
-                    r.critic.clone(),
-                    chosen.clone(),
-                )),
-            };
-            Ok::<_, GraspEnvError>(match a.pregrasp {
-                Placement::TopDown => env,
-                Placement::Antipodal => env.with_pregrasp(Box::new(CountedPregrasp {
-                    inner,
-                    counts: counts.clone(),
-                })),
-            })
-        };
-        if !g.quiet {
-            eprintln!(
-                "evaluating {}{} on {} objects x {} trials ...",
-                ag.spec.label(),
-                ag.env.action.grip_note(),
-                names.len(),
-                a.trials
-            );
-        }
-        if signal::stopped() {
-            break;
-        }
-        results.push(evaluate_until(
-            &names,
-            &TrialPlan {
-                trials: a.trials,
-                seed,
-                attempts: a.attempts,
-            },
-            n_threads,
-            &make_env,
-            EvalAgent {
-                spec: &ag.spec,
-                network: ag.network.as_ref(),
-            },
-            record.as_ref(),
-            Some(&signal::STOP),
-        )?);
-        if results.last().is_some_and(|r| r.objects.is_empty()) {
-            // Stopped by a signal before any of its trials finished.
-            results.pop();
-            break;
-        }
-        if let Some(r) = results.last_mut() {
-            r.conditions = conditions.clone();
-        }
-        if a.pregrasp == Placement::Antipodal {
-            let [planned, fallback] = [0, 1].map(|k| counts[k].load(Ordering::Relaxed));
-            let ranked = ranker.as_ref().map(|rk| RankStats {
-                top: a.rank_top,
-                ranker: rk.dir.display().to_string(),
-                chosen: chosen.iter().map(|n| n.load(Ordering::Relaxed)).collect(),
-            });
-            if !g.quiet {
-                eprintln!(
-                    "  pre-grasp: {planned} episodes from an antipodal plan, {fallback} at the default placement (no plan on the cloud)"
-                );
-                if let Some(rk) = &ranked {
-                    eprintln!(
-                        "  ranked by the critic of {} among the planner's top {}: chosen by place {:?}",
-                        rk.ranker, rk.top, rk.chosen
-                    );
-                }
-            }
-            if let Some(r) = results.last_mut() {
-                r.pregrasp = Some(PregraspStats {
-                    placement: placement_name(a.pregrasp),
-                    planned,
-                    default_placement: fallback,
-                    ranked,
-                });
-            }
-        }
-    }
-    Ok(results)
+    let say = |e: EvalEvent| match e {
+        EvalEvent::Warning(m) if !g.quiet => eprintln!("warning: {m}"),
+        EvalEvent::Progress(m) if !g.quiet => eprintln!("{m}"),
+        _ => {}
+    };
+    Ok(grasp::eval::request::measure(
+        &req,
+        &say,
+        Some(&signal::STOP),
+    )?)
 }
 
 /// Prints `results` as the flags ask: JSON, Markdown or text, with the lift statistics and

@@ -315,19 +315,16 @@ pub fn load_objects(arg: &str) -> anyhow::Result<Vec<grasp::objects::Object>> {
         .with_context(|| format!("cannot load objects `{arg}`"))
 }
 
-/// Loads the synergy model (shipped one by default) with `n` components.
+/// Loads the synergy model (shipped one by default) with `n` components
+/// ([`grasp::synergy::model_or_shipped`]).
 pub fn load_synergy(
     path: Option<&std::path::PathBuf>,
     n: usize,
 ) -> anyhow::Result<grasp::synergy::SynergyModel> {
-    let model = match path {
-        Some(p) => grasp::synergy::SynergyModel::load(p)
-            .with_context(|| format!("loading synergy model {}", p.display()))?,
-        None => grasp::synergy::default_model(),
-    };
-    model
-        .truncated(n)
-        .with_context(|| format!("using {n} synergy components"))
+    Ok(grasp::synergy::model_or_shipped(
+        path.map(|p| p.as_path()),
+        n,
+    )?)
 }
 
 /// Resolves `--objects` into the simulator's object descriptions

@@ -25,6 +25,7 @@ pub mod pool;
 pub mod rank;
 pub mod record;
 pub mod regression;
+pub mod request;
 pub mod trial;
 
 mod agent;

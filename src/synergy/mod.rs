@@ -46,6 +46,32 @@ pub fn default_model() -> SynergyModel {
     .unwrap_or_else(|e| panic!("the shipped synergy model is invalid: {e}"))
 }
 
+/// Error of [`model_or_shipped`]: which step failed, its cause following.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelChoiceError {
+    /// The model file could not be loaded.
+    #[error("loading synergy model {}", .0.display())]
+    Load(std::path::PathBuf, #[source] SynergyError),
+    /// The model has not that many components.
+    #[error("using {0} synergy components")]
+    Components(usize, #[source] SynergyError),
+}
+
+/// The synergy model of `path` (the shipped one when `None`, [`default_model`]) truncated
+/// to `n` components: what a `--synergy`/`--components` pair names.
+pub fn model_or_shipped(
+    path: Option<&std::path::Path>,
+    n: usize,
+) -> Result<SynergyModel, ModelChoiceError> {
+    let model = match path {
+        Some(p) => SynergyModel::load(p).map_err(|e| ModelChoiceError::Load(p.to_path_buf(), e))?,
+        None => default_model(),
+    };
+    model
+        .truncated(n)
+        .map_err(|e| ModelChoiceError::Components(n, e))
+}
+
 /// Lower and upper limits (radians) of the 22 finger joints of `side`, in
 /// [`FINGER_JOINTS`] order, read from [`hand_facts`]. Both hands have the same limits.
 pub fn finger_limits(side: Side) -> [(f64, f64); N_FINGER_JOINTS] {
