@@ -21,6 +21,7 @@ use crate::ppo::LoadedPolicy;
 use crate::robot::{Robot, Side};
 use crate::sim::{ObjectSetError, ObjectSpec, SimConfig};
 use crate::synergy::SynergyModel;
+use crate::util::step::{step, StepError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -101,15 +102,9 @@ pub enum MeasureError {
     /// A flag's value, or flags that do not go together.
     #[error("{0}")]
     Flags(String),
-    /// A step of the set-up failed; the cause follows.
-    #[error("{what}")]
-    Step {
-        /// The step (the file it read).
-        what: String,
-        /// Why.
-        #[source]
-        source: Box<dyn std::error::Error + Send + Sync>,
-    },
+    /// A step of the set-up or of the work failed; the cause follows.
+    #[error(transparent)]
+    Step(#[from] StepError),
     /// The objects cannot be simulated.
     #[error(transparent)]
     Objects(#[from] ObjectSetError),
@@ -125,17 +120,6 @@ pub enum MeasureError {
     /// The evaluation failed.
     #[error(transparent)]
     Eval(#[from] EvalError),
-}
-
-/// Wraps a step's error with what the step was.
-fn step<T, E>(r: Result<T, E>, what: impl FnOnce() -> String) -> Result<T, MeasureError>
-where
-    E: std::error::Error + Send + Sync + 'static,
-{
-    r.map_err(|e| MeasureError::Step {
-        what: what(),
-        source: Box::new(e),
-    })
 }
 
 /// The agent named by one `policy` entry; checkpoints act by sampling when `stochastic`.

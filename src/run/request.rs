@@ -21,6 +21,7 @@ use crate::perception::pointcloud::{write_pcd, PcdData, PointCloud};
 use crate::robot::{Robot, Side};
 use crate::sim::{ObjectSpec, SimConfig};
 use crate::util::fsx::{check_outputs, Named};
+use crate::util::step::{step, StepError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -185,14 +186,8 @@ pub enum RequestError {
     #[error("{0}")]
     Flags(String),
     /// A step of the set-up or of the work failed; the cause follows.
-    #[error("{what}")]
-    Step {
-        /// The step (the file it read where there is one).
-        what: String,
-        /// Why.
-        #[source]
-        source: Box<dyn std::error::Error + Send + Sync>,
-    },
+    #[error(transparent)]
+    Step(#[from] StepError),
     /// The grasp pipeline refused something.
     #[error(transparent)]
     Run(#[from] RunError),
@@ -213,17 +208,6 @@ pub enum RequestError {
 /// `Err(what)` for a refused flag.
 fn refuse<T>(what: String) -> Result<T, RequestError> {
     Err(RequestError::Flags(what))
-}
-
-/// Wraps a step's error with what the step was.
-fn step<T, E>(r: Result<T, E>, what: impl FnOnce() -> String) -> Result<T, RequestError>
-where
-    E: std::error::Error + Send + Sync + 'static,
-{
-    r.map_err(|e| RequestError::Step {
-        what: what(),
-        source: Box::new(e),
-    })
 }
 
 /// Carries out `req` (see the module docs), telling `on_event` of each attempt and trial
@@ -298,12 +282,12 @@ fn pipeline_config(
 /// The simulator config of `req`, by [`SimConfig::load_or_default`]'s one rule.
 fn sim_config(req: &RunRequest) -> Result<SimConfig, RequestError> {
     let path = req.sim_config.as_deref();
-    step(SimConfig::load_or_default(path), || {
+    Ok(step(SimConfig::load_or_default(path), || {
         format!(
             "loading the simulator config {}",
             path.map_or_else(String::new, |p| p.display().to_string())
         )
-    })
+    })?)
 }
 
 /// The calibration file of `req`, loaded.
@@ -624,9 +608,10 @@ impl<'r> One<'r> {
 #[cfg(feature = "ros")]
 pub fn connect_ros(url: &str) -> Result<crate::hardware::ros::RosHandArm, RequestError> {
     use crate::hardware::ros::{RosConfig, RosHandArm};
-    step(RosHandArm::connect(url, RosConfig::default()), || {
-        format!("connecting to rosbridge at {url}")
-    })
+    Ok(step(
+        RosHandArm::connect(url, RosConfig::default()),
+        || format!("connecting to rosbridge at {url}"),
+    )?)
 }
 
 /// The agents of a table's `policy`: `baseline1`, `baseline2` or a checkpoint folder (the

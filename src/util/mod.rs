@@ -1,7 +1,7 @@
 //! Small helpers shared across the crate: where a default naming a shipped file lies
 //! ([`assets`]), atomic writes, TOML configuration loading, a stable hash, the torque
-//! levels, thread counts, numbers in messages, repeats in lists, stopping on a signal and
-//! the statistics of measurements.
+//! levels, thread counts, numbers in messages, repeats in lists, stopping on a signal,
+//! the statistics of measurements and a failed step's context ([`step`]).
 
 pub mod assets;
 pub mod config;
@@ -12,4 +12,5 @@ pub mod num;
 pub mod seq;
 pub mod signal;
 pub mod stats;
+pub mod step;
 pub mod threads;
