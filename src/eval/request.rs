@@ -21,7 +21,7 @@ use crate::ppo::LoadedPolicy;
 use crate::robot::{Robot, Side};
 use crate::sim::{ObjectSetError, ObjectSpec, SimConfig};
 use crate::synergy::SynergyModel;
-use crate::util::step::{step, StepError};
+use crate::util::step::{StepContext, StepError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -187,9 +187,8 @@ fn agent_envs(
                 n_components: Some(flag_components),
                 synergy: req.synergy.clone(),
             };
-            let mut agent = step(TrainedAgent::load_assuming(dir, &assumed), || {
-                format!("loading checkpoint {}", dir.display())
-            })?;
+            let mut agent = TrainedAgent::load_assuming(dir, &assumed)
+                .step(|| format!("loading checkpoint {}", dir.display()))?;
             if !agent.has_config() {
                 warn(format!(
                     "{} has no config.toml; using --modality/--components",
@@ -237,9 +236,8 @@ fn eval_sim_config(
     let flag = match flag {
         Some(p) => Some((
             p,
-            step(SimConfig::load_or_default(Some(p)), || {
-                format!("loading the simulator config {}", p.display())
-            })?,
+            SimConfig::load_or_default(Some(p))
+                .step(|| format!("loading the simulator config {}", p.display()))?,
         )),
         None => None,
     };

@@ -21,7 +21,7 @@ use crate::perception::pointcloud::{write_pcd, PcdData, PointCloud};
 use crate::robot::{Robot, Side};
 use crate::sim::{ObjectSpec, SimConfig};
 use crate::util::fsx::{check_outputs, Named};
-use crate::util::step::{step, StepError};
+use crate::util::step::{StepContext, StepError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -223,10 +223,9 @@ pub fn execute(
         if req.backend != RobotBackend::Mujoco {
             return refuse("--mujoco-settings is for --backend mujoco".into());
         }
-        step(
-            super::mjcf::MujocoSettings::load(p).and_then(|s| s.use_for_process()),
-            || format!("--mujoco-settings {}", p.display()),
-        )?;
+        super::mjcf::MujocoSettings::load(p)
+            .and_then(|s| s.use_for_process())
+            .step(|| format!("--mujoco-settings {}", p.display()))?;
     }
     let robot = Robot::builtin(Side::Left);
     if req.objects.is_some() {
@@ -262,9 +261,8 @@ fn pipeline_config(
     sim: Option<&SimConfig>,
 ) -> Result<PipelineConfig, RequestError> {
     let mut cfg: PipelineConfig = match &req.config {
-        Some(p) => step(crate::util::config::load_toml(p), || {
-            format!("loading pipeline config {}", p.display())
-        })?,
+        Some(p) => crate::util::config::load_toml(p)
+            .step(|| format!("loading pipeline config {}", p.display()))?,
         None => PipelineConfig::default(),
     };
     if let Some(s) = sim {
@@ -272,7 +270,7 @@ fn pipeline_config(
         // lifts as configured.
         fit_to_simulator(&mut cfg, s);
     }
-    step(cfg.validate(), || match &req.config {
+    cfg.validate().step(|| match &req.config {
         Some(p) => format!("pipeline config {}", p.display()),
         None => "pipeline config".into(),
     })?;
@@ -282,7 +280,7 @@ fn pipeline_config(
 /// The simulator config of `req`, by [`SimConfig::load_or_default`]'s one rule.
 fn sim_config(req: &RunRequest) -> Result<SimConfig, RequestError> {
     let path = req.sim_config.as_deref();
-    Ok(step(SimConfig::load_or_default(path), || {
+    Ok(SimConfig::load_or_default(path).step(|| {
         format!(
             "loading the simulator config {}",
             path.map_or_else(String::new, |p| p.display().to_string())
@@ -304,10 +302,9 @@ impl GraspInput {
         let source = match self {
             GraspInput::File(p) => GraspSource::Given(load_grasp_file(p)?),
             GraspInput::Cloud(p) => GraspSource::Cloud(
-                step(PointCloud::load(p), || {
-                    format!("loading point cloud {}", p.display())
-                })?
-                .points,
+                PointCloud::load(p)
+                    .step(|| format!("loading point cloud {}", p.display()))?
+                    .points,
             ),
             GraspInput::Given {
                 center,
@@ -322,7 +319,7 @@ impl GraspInput {
                         None => [0.0, 0.0, -1.0],
                     },
                 };
-                GraspSource::Given(step(f.grasp(), || "the command-line grasp".into())?)
+                GraspSource::Given(f.grasp().step(|| "the command-line grasp".into())?)
             }
         };
         super::plan::check_source(&source)?;
@@ -348,9 +345,7 @@ fn three(v: &[f64], name: &str) -> Result<[f64; 3], RequestError> {
 /// Writes a cloud source as PCD.
 fn save_cloud(path: &Path, source: &GraspSource) -> Result<(), RequestError> {
     if let GraspSource::Cloud(points) = source {
-        step(write_pcd(path, points, PcdData::Ascii), || {
-            format!("writing {}", path.display())
-        })?;
+        write_pcd(path, points, PcdData::Ascii).step(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }
@@ -449,9 +444,8 @@ impl<'r> One<'r> {
             .unwrap_or_else(|| PathBuf::from(DEFAULT_LOG));
         check_overlaps(req, &[PathBuf::from(&req.policy)], Some(&log))?;
         let dir = policy_dir(&req.policy)?;
-        let policy = step(PolicyRunner::load(&dir), || {
-            format!("loading policy {}", dir.display())
-        })?;
+        let policy =
+            PolicyRunner::load(&dir).step(|| format!("loading policy {}", dir.display()))?;
         let calibration = calibration(req)?;
         let source = req.grasp.as_ref().map(GraspInput::source).transpose()?;
         Ok(One {
@@ -577,18 +571,16 @@ impl<'r> One<'r> {
             )
             .map_err(RunError::from)?;
             let mut log = AttemptLog::open(&self.log).map_err(RunError::from)?;
-            let out = step(
-                super::pipeline::run_attempt(
-                    &mut arm,
-                    &self.robot,
-                    &plan,
-                    &mut self.policy,
-                    &calibration,
-                    &cfg,
-                    &mut log,
-                ),
-                || "grasp attempt failed".into(),
-            )?;
+            let out = super::pipeline::run_attempt(
+                &mut arm,
+                &self.robot,
+                &plan,
+                &mut self.policy,
+                &calibration,
+                &cfg,
+                &mut log,
+            )
+            .step(|| "grasp attempt failed".into())?;
             let done = report(req, &self.log, &plan, &out, false, None);
             on_event(RunEvent::Attempt(&done));
             Ok(RunOutput::Attempts {
@@ -608,10 +600,8 @@ impl<'r> One<'r> {
 #[cfg(feature = "ros")]
 pub fn connect_ros(url: &str) -> Result<crate::hardware::ros::RosHandArm, RequestError> {
     use crate::hardware::ros::{RosConfig, RosHandArm};
-    Ok(step(
-        RosHandArm::connect(url, RosConfig::default()),
-        || format!("connecting to rosbridge at {url}"),
-    )?)
+    Ok(RosHandArm::connect(url, RosConfig::default())
+        .step(|| format!("connecting to rosbridge at {url}"))?)
 }
 
 /// The agents of a table's `policy`: `baseline1`, `baseline2` or a checkpoint folder (the
@@ -692,18 +682,16 @@ fn table<A: SimulatedArm>(
         backend: A::NAME,
     });
     let tick = || on_event(RunEvent::TrialDone);
-    let mut results = step(
-        run_table::<A>(
-            robot,
-            &objects,
-            &agents,
-            &cfg,
-            req.log.as_deref(),
-            &tick,
-            stop,
-        ),
-        || "running the table".into(),
-    )?;
+    let mut results = run_table::<A>(
+        robot,
+        &objects,
+        &agents,
+        &cfg,
+        req.log.as_deref(),
+        &tick,
+        stop,
+    )
+    .step(|| "running the table".into())?;
     let interrupted = stop.is_some_and(|s| s.load(Ordering::SeqCst));
     // An agent none of whose trials finished before a stop has nothing to report.
     results.retain(|r| !r.result.objects.is_empty());

@@ -13,15 +13,23 @@ pub struct StepError {
     pub source: Box<dyn std::error::Error + Send + Sync>,
 }
 
-/// `r`, its error wrapped with what the step was.
-pub fn step<T, E>(r: Result<T, E>, what: impl FnOnce() -> String) -> Result<T, StepError>
+/// Wraps a result's error with what the step was, as `anyhow`'s `with_context` does for a
+/// command: `SimConfig::load(p).step(|| format!("loading {}", p.display()))?`.
+pub trait StepContext<T> {
+    /// The result, its error wrapped with `what()`.
+    fn step(self, what: impl FnOnce() -> String) -> Result<T, StepError>;
+}
+
+impl<T, E> StepContext<T> for Result<T, E>
 where
     E: std::error::Error + Send + Sync + 'static,
 {
-    r.map_err(|e| StepError {
-        what: what(),
-        source: Box::new(e),
-    })
+    fn step(self, what: impl FnOnce() -> String) -> Result<T, StepError> {
+        self.map_err(|e| StepError {
+            what: what(),
+            source: Box::new(e),
+        })
+    }
 }
 
 #[cfg(test)]
@@ -31,10 +39,10 @@ mod tests {
     #[test]
     fn a_step_says_what_it_was_and_keeps_its_cause() {
         let r: Result<(), std::io::Error> = Err(std::io::Error::other("disk full"));
-        let e = step(r, || "writing x.toml".into()).unwrap_err();
+        let e = r.step(|| "writing x.toml".into()).unwrap_err();
         assert_eq!(e.to_string(), "writing x.toml");
         let cause = std::error::Error::source(&e).map(|c| c.to_string());
         assert_eq!(cause.as_deref(), Some("disk full"));
-        assert_eq!(step(Ok::<u8, std::io::Error>(3), String::new).unwrap(), 3);
+        assert_eq!(Ok::<u8, std::io::Error>(3).step(String::new).unwrap(), 3);
     }
 }
