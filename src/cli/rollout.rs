@@ -2,18 +2,14 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use grasp::env::curriculum::CurriculumConfig;
-use grasp::env::grasp::{run_episode, EnvConfig, EpisodeSummary, GraspEnv, RandomAgent};
-use grasp::eval::record::{
-    record_agent_episode, record_baseline_episode, write_recording, RecordingEntry,
-};
-use grasp::robot::{Robot, Side};
+use grasp::env::grasp::EpisodeSummary;
+use grasp::eval::record::RecordOptions;
+use grasp::eval::rollout::{rollout, RolloutRequest, ScriptedAgent};
 use grasp::util::signal;
-use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{load_synergy, sim_objects, threads, Global};
+use super::Global;
 
 /// Run episodes of a baseline or a random agent and print each outcome and a summary.
 #[derive(Debug, Args)]
@@ -49,40 +45,48 @@ pub struct RolloutArgs {
     pub rec: super::RecordArgs,
 }
 
-/// One episode's result: its index, its summary and its recording (with `--record`).
-type Done = (usize, EpisodeSummary, Option<RecordingEntry>);
-
 pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
-    let kind = agent_kind(&a)?;
-    let seed = g.seed.unwrap_or(0);
-    let n_threads = threads(a.threads)?.min(a.episodes);
+    let agent = check_flags(&a)?;
+    let req = RolloutRequest {
+        agent,
+        name: a.policy.clone(),
+        objects: a.objects.clone(),
+        episodes: a.episodes,
+        synergy: a.synergy.clone(),
+        components: a.components,
+        sim_config: a.sim_config.clone(),
+        difficulty: a.difficulty,
+        threads: a.threads,
+        record: a.rec.record.as_ref().map(|dir| RecordOptions {
+            dir: dir.clone(),
+            every: a.rec.record_every,
+            only_failures: a.rec.record_failures,
+            name: None,
+        }),
+        seed: g.seed.unwrap_or(0),
+    };
     let start = Instant::now();
     signal::stop_on_signal(
         "finishing the episodes in progress, then printing them",
         g.quiet,
     )
     .context("installing the Ctrl-C and SIGTERM handler")?;
-    let record_errors = std::sync::Mutex::new(Vec::new());
-    let mut done = run_episodes(&a, kind, seed, n_threads, &record_errors)?;
+    let out = rollout(&req, Some(&signal::STOP))?;
     let wall = start.elapsed().as_secs_f64();
-    done.sort_by_key(|d| d.0);
     let interrupted = signal::stopped();
-    if interrupted && done.is_empty() {
+    if interrupted && out.episodes.is_empty() {
         super::exit_interrupted(" before any episode finished: nothing to report", false);
     }
     // The episodes are printed before any file is written: a failed write loses nothing.
-    let all: Vec<(usize, EpisodeSummary)> = done.iter().map(|d| (d.0, d.1.clone())).collect();
-    report(&a, g, seed, &all, wall, n_threads)?;
+    report(&a, g, req.seed, &out.episodes, wall, out.threads)?;
     if let Some(dir) = &a.rec.record {
-        let entries: Vec<RecordingEntry> = done.iter().filter_map(|d| d.2.clone()).collect();
-        let errors = record_errors.into_inner().unwrap_or_default();
-        super::finish_recordings(dir, &entries, &errors, g.quiet)?;
+        super::finish_recordings(dir, &out.recordings, &out.record_errors, g.quiet)?;
     }
     if interrupted {
         super::exit_interrupted(
             &format!(
                 ": {} of {} episodes finished, printed above",
-                all.len(),
+                out.episodes.len(),
                 a.episodes
             ),
             g.quiet,
@@ -91,108 +95,15 @@ pub fn run(a: RolloutArgs, g: &Global) -> Result<()> {
     Ok(())
 }
 
-/// The agent of `--policy` (0: random, 1 and 2: the baselines), after checking the other
-/// flags.
-fn agent_kind(a: &RolloutArgs) -> Result<u8> {
-    let kind = match a.policy.as_str() {
-        "baseline1" => 1,
-        "baseline2" => 2,
-        "random" => 0,
-        other => bail!("unknown policy '{other}': expected baseline1, baseline2 or random"),
-    };
+/// The agent of `--policy`, after checking the other flags.
+fn check_flags(a: &RolloutArgs) -> Result<ScriptedAgent> {
+    let agent = ScriptedAgent::parse(&a.policy).map_err(anyhow::Error::msg)?;
     if a.episodes == 0 {
         bail!("--episodes must be at least 1");
     }
     a.rec.check()?;
     super::check_difficulty(a.difficulty)?;
-    Ok(kind)
-}
-
-/// Runs (and with `--record`, records) every episode on `n_threads` threads. Episode i
-/// always runs the scene of seed (seed, i): outcomes do not depend on the number of
-/// threads.
-fn run_episodes(
-    a: &RolloutArgs,
-    kind: u8,
-    seed: u64,
-    n_threads: usize,
-    record_errors: &std::sync::Mutex<Vec<String>>,
-) -> Result<Vec<Done>> {
-    let robot = Robot::builtin(Side::Left);
-    let model = load_synergy(a.synergy.as_ref(), a.components)?;
-    let sim_cfg = super::sim_config(a.sim_config.as_ref())?;
-    let objects = sim_objects(&a.objects)?;
-    let env_cfg = EnvConfig {
-        curriculum: CurriculumConfig::fixed(a.difficulty),
-        ..EnvConfig::default()
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(n_threads)
-        .build()
-        .context("building the thread pool")?;
-    let chunks: Vec<Vec<usize>> = (0..n_threads)
-        .map(|t| (t..a.episodes).step_by(n_threads).collect())
-        .collect();
-    let results: Vec<Vec<Done>> = pool.install(|| {
-        chunks
-            .par_iter()
-            .map(|idx| -> Result<Vec<Done>> {
-                let mut env = GraspEnv::new(
-                    &robot,
-                    objects.clone(),
-                    model.clone(),
-                    sim_cfg.clone(),
-                    env_cfg.clone(),
-                )?;
-                let n = model.n_components() + 2;
-                idx.iter()
-                    .take_while(|_| !signal::stopped())
-                    .map(|&i| {
-                        let s = grasp::env::api::episode_seed(seed, 0, i as u64);
-                        if let Some(dir) = &a.rec.record {
-                            let rec = match kind {
-                                0 => record_agent_episode(
-                                    &mut env,
-                                    &mut RandomAgent::new(n, 0.15, s),
-                                    &a.policy,
-                                    s,
-                                    a.rec.record_every,
-                                ),
-                                k => record_baseline_episode(
-                                    &mut env,
-                                    k == 2,
-                                    &a.policy,
-                                    s,
-                                    a.rec.record_every,
-                                )?,
-                            };
-                            if a.rec.record_failures && !rec.summary.physics_failure {
-                                return Ok((i, rec.summary, None));
-                            }
-                            // A recording that cannot be written (a full disk) does not
-                            // end the rollout: said after the episodes are printed.
-                            let entry = match write_recording(dir, &rec, i, 0) {
-                                Ok(e) => Some(e),
-                                Err(e) => {
-                                    if let Ok(mut v) = record_errors.lock() {
-                                        v.push(e.to_string());
-                                    }
-                                    None
-                                }
-                            };
-                            return Ok((i, rec.summary, entry));
-                        }
-                        let r = match kind {
-                            0 => run_episode(&mut env, &mut RandomAgent::new(n, 0.15, s), s),
-                            k => env.run_baseline(k == 2, s)?,
-                        };
-                        Ok((i, r, None))
-                    })
-                    .collect()
-            })
-            .collect::<Result<Vec<_>>>()
-    })?;
-    Ok(results.into_iter().flatten().collect())
+    Ok(agent)
 }
 
 /// Prints the episodes and their totals (a table, or JSON with `--json`).

@@ -26,6 +26,7 @@ pub mod rank;
 pub mod record;
 pub mod regression;
 pub mod request;
+pub mod rollout;
 pub mod trial;
 
 mod agent;
