@@ -95,8 +95,8 @@ pub enum EvalEvent {
     Progress(String),
 }
 
-/// Error of a measurement: a refused flag, a failed step with its cause, or the
-/// evaluation's own.
+/// Error of a measurement or a rollout ([`super::rollout`]): a refused flag, a failed step
+/// with its cause, or the evaluation's own.
 #[derive(Debug, thiserror::Error)]
 pub enum MeasureError {
     /// A flag's value, or flags that do not go together.

@@ -7,13 +7,13 @@
 use super::record::{
     record_agent_episode, record_baseline_episode, write_recording, RecordOptions, RecordingEntry,
 };
+use super::request::MeasureError;
+use super::EvalError;
 use crate::env::curriculum::CurriculumConfig;
-use crate::env::grasp::{
-    run_episode, EnvConfig, EpisodeSummary, GraspEnv, GraspEnvError, RandomAgent,
-};
+use crate::env::grasp::{run_episode, EnvConfig, EpisodeSummary, GraspEnv, RandomAgent};
 use crate::robot::{Robot, Side};
-use crate::sim::{ObjectSetError, ObjectSpec, SimConfig, SimError};
-use crate::util::step::{StepContext, StepError};
+use crate::sim::{ObjectSpec, SimConfig};
+use crate::util::step::StepContext;
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -84,29 +84,6 @@ pub struct RolloutOutput {
     pub threads: usize,
 }
 
-/// Error of a rollout: a refused flag, a failed step with its cause, or the episodes' own.
-#[derive(Debug, thiserror::Error)]
-pub enum RolloutError {
-    /// A flag's value.
-    #[error("{0}")]
-    Flags(String),
-    /// A step of the set-up failed; the cause follows.
-    #[error(transparent)]
-    Step(#[from] StepError),
-    /// The objects cannot be simulated.
-    #[error(transparent)]
-    Objects(#[from] ObjectSetError),
-    /// The synergy model cannot be used.
-    #[error(transparent)]
-    Synergy(#[from] crate::synergy::ModelChoiceError),
-    /// The environment could not be built.
-    #[error(transparent)]
-    Env(#[from] GraspEnvError),
-    /// The simulator refused an episode.
-    #[error(transparent)]
-    Sim(#[from] SimError),
-}
-
 /// One episode's result: its index, its summary and its recording.
 type Done = (usize, EpisodeSummary, Option<RecordingEntry>);
 
@@ -114,10 +91,10 @@ type Done = (usize, EpisodeSummary, Option<RecordingEntry>);
 pub fn rollout(
     req: &RolloutRequest,
     stop: Option<&AtomicBool>,
-) -> Result<RolloutOutput, RolloutError> {
+) -> Result<RolloutOutput, MeasureError> {
     let stopped = || stop.is_some_and(|s| s.load(Ordering::SeqCst));
     let n_threads = crate::util::threads::resolve(req.threads)
-        .map_err(|m| RolloutError::Flags(format!("--threads {m}")))?
+        .map_err(|m| MeasureError::Flags(format!("--threads {m}")))?
         .min(req.episodes);
     let robot = Robot::builtin(Side::Left);
     let model = crate::synergy::model_or_shipped(req.synergy.as_deref(), req.components)?;
@@ -146,14 +123,15 @@ pub fn rollout(
     let results: Vec<Vec<Done>> = pool.install(|| {
         chunks
             .par_iter()
-            .map(|idx| -> Result<Vec<Done>, RolloutError> {
+            .map(|idx| -> Result<Vec<Done>, MeasureError> {
                 let mut env = GraspEnv::new(
                     &robot,
                     objects.clone(),
                     model.clone(),
                     sim_cfg.clone(),
                     env_cfg.clone(),
-                )?;
+                )
+                .map_err(EvalError::from)?;
                 idx.iter()
                     .take_while(|_| !stopped())
                     .map(|&i| {
@@ -165,7 +143,9 @@ pub fn rollout(
                                     &mut RandomAgent::new(n_actions, 0.15, s),
                                     s,
                                 ),
-                                b => env.run_baseline(b == ScriptedAgent::Baseline2, s)?,
+                                b => env
+                                    .run_baseline(b == ScriptedAgent::Baseline2, s)
+                                    .map_err(EvalError::from)?,
                             };
                             return Ok((i, r, None));
                         };
@@ -183,7 +163,8 @@ pub fn rollout(
                                 &req.name,
                                 s,
                                 rec_opts.every,
-                            )?,
+                            )
+                            .map_err(EvalError::from)?,
                         };
                         if rec_opts.only_failures && !rec.summary.physics_failure {
                             return Ok((i, rec.summary, None));
