@@ -271,13 +271,7 @@ pub fn check_attempts(n: usize, what: &str) -> anyhow::Result<()> {
 /// [`grasp::sim::SimConfig::load_or_default`]'s one rule (the built-in defaults when
 /// absent); errors name the file.
 pub fn sim_config(path: Option<&std::path::PathBuf>) -> anyhow::Result<grasp::sim::SimConfig> {
-    use anyhow::Context;
-    grasp::sim::SimConfig::load_or_default(path.map(|p| p.as_path())).with_context(|| {
-        format!(
-            "loading the simulator config {}",
-            path.map_or_else(String::new, |p| p.display().to_string())
-        )
-    })
+    Ok(grasp::sim::SimConfig::load_flag(path.map(|p| p.as_path()))?)
 }
 
 // The helpers several commands share (the objects, synergy model, thread count and
@@ -336,7 +330,7 @@ pub fn sim_objects(arg: &str) -> anyhow::Result<Vec<(String, grasp::sim::ObjectS
 /// Number of worker threads: the `--threads` flag (checked by the one rule of
 /// [`grasp::util::threads`]) or the available cores.
 pub fn threads(flag: Option<usize>) -> anyhow::Result<usize> {
-    grasp::util::threads::resolve(flag).map_err(|m| anyhow::anyhow!("--threads {m}"))
+    grasp::util::threads::from_flag(flag).map_err(anyhow::Error::msg)
 }
 
 /// Which hand-arm system to drive.

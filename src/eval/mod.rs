@@ -136,7 +136,7 @@ pub fn evaluate_until(
     stop: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<AgentResult, EvalError> {
     let EvalAgent { spec, network } = agent;
-    let stopped = || stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
+    let stopped = || crate::util::signal::is_set(stop);
     let TrialPlan {
         trials,
         seed,

@@ -234,11 +234,7 @@ fn eval_sim_config(
     say: &dyn Fn(EvalEvent),
 ) -> Result<SimConfig, MeasureError> {
     let flag = match flag {
-        Some(p) => Some((
-            p,
-            SimConfig::load_or_default(Some(p))
-                .step(|| format!("loading the simulator config {}", p.display()))?,
-        )),
+        Some(p) => Some((p, SimConfig::load_flag(Some(p))?)),
         None => None,
     };
     let trained: Vec<(&Path, Option<&Path>)> = agents
@@ -353,7 +349,6 @@ pub fn measure(
     say: &(dyn Fn(EvalEvent) + Sync),
     stop: Option<&AtomicBool>,
 ) -> Result<Vec<AgentResult>, MeasureError> {
-    let stopped = || stop.is_some_and(|s| s.load(Ordering::SeqCst));
     let specs = req
         .policy
         .iter()
@@ -385,8 +380,7 @@ pub fn measure(
     };
     let ranker = ranker(req, &agents, conditions.as_ref(), say)?;
     let rec_names = recording_names(req, &agents, &names)?;
-    let n_threads = crate::util::threads::resolve(req.threads)
-        .map_err(|m| MeasureError::Flags(format!("--threads {m}")))?;
+    let n_threads = crate::util::threads::from_flag(req.threads).map_err(MeasureError::Flags)?;
     let mut results = Vec::new();
     for (i, ag) in agents.iter().enumerate() {
         let record = req.record.as_ref().map(|r| RecordOptions {
@@ -422,7 +416,7 @@ pub fn measure(
             names.len(),
             req.trials
         )));
-        if stopped() {
+        if crate::util::signal::is_set(stop) {
             break;
         }
         results.push(evaluate_until(

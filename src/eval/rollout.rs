@@ -16,7 +16,7 @@ use crate::sim::{ObjectSpec, SimConfig};
 use crate::util::step::StepContext;
 use rayon::prelude::*;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Mutex;
 
 /// The agent of a rollout.
@@ -92,20 +92,12 @@ pub fn rollout(
     req: &RolloutRequest,
     stop: Option<&AtomicBool>,
 ) -> Result<RolloutOutput, MeasureError> {
-    let stopped = || stop.is_some_and(|s| s.load(Ordering::SeqCst));
-    let n_threads = crate::util::threads::resolve(req.threads)
-        .map_err(|m| MeasureError::Flags(format!("--threads {m}")))?
+    let n_threads = crate::util::threads::from_flag(req.threads)
+        .map_err(MeasureError::Flags)?
         .min(req.episodes);
     let robot = Robot::builtin(Side::Left);
     let model = crate::synergy::model_or_shipped(req.synergy.as_deref(), req.components)?;
-    let sim_cfg = SimConfig::load_or_default(req.sim_config.as_deref()).step(|| {
-        format!(
-            "loading the simulator config {}",
-            req.sim_config
-                .as_ref()
-                .map_or_else(String::new, |p| p.display().to_string())
-        )
-    })?;
+    let sim_cfg = SimConfig::load_flag(req.sim_config.as_deref())?;
     let objects = ObjectSpec::simulable_set(&req.objects)?;
     let env_cfg = EnvConfig {
         curriculum: CurriculumConfig::fixed(req.difficulty),
@@ -133,7 +125,7 @@ pub fn rollout(
                 )
                 .map_err(EvalError::from)?;
                 idx.iter()
-                    .take_while(|_| !stopped())
+                    .take_while(|_| !crate::util::signal::is_set(stop))
                     .map(|&i| {
                         let s = crate::env::api::episode_seed(req.seed, 0, i as u64);
                         let Some(rec_opts) = &req.record else {

@@ -24,7 +24,7 @@ use crate::util::fsx::{check_outputs, Named};
 use crate::util::step::{StepContext, StepError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 /// The attempt log of a single run when the request names none.
 pub const DEFAULT_LOG: &str = "attempt.jsonl";
@@ -277,17 +277,6 @@ fn pipeline_config(
     Ok(cfg)
 }
 
-/// The simulator config of `req`, by [`SimConfig::load_or_default`]'s one rule.
-fn sim_config(req: &RunRequest) -> Result<SimConfig, RequestError> {
-    let path = req.sim_config.as_deref();
-    Ok(SimConfig::load_or_default(path).step(|| {
-        format!(
-            "loading the simulator config {}",
-            path.map_or_else(String::new, |p| p.display().to_string())
-        )
-    })?)
-}
-
 /// The calibration file of `req`, loaded.
 fn calibration(req: &RunRequest) -> Result<Option<TactileCalibration>, RequestError> {
     Ok(match &req.calibration {
@@ -363,21 +352,21 @@ fn check_overlaps(
         .flat_map(|p| crate::checkpoint::files::read_by_commands(p))
         .collect();
     let mut inputs: Vec<Named> = ckpt.iter().map(|p| Named::new("--policy", p)).collect();
-    let grasp = match &req.grasp {
-        Some(GraspInput::File(p)) => Some(("--grasp", p)),
-        Some(GraspInput::Cloud(p)) => Some(("--cloud", p)),
-        _ => None,
+    let (grasp, cloud) = match &req.grasp {
+        Some(GraspInput::File(p)) => (Some(p), None),
+        Some(GraspInput::Cloud(p)) => (None, Some(p)),
+        _ => (None, None),
     };
-    for (flag, p) in grasp.into_iter().chain(
-        [
-            ("--calibration", &req.calibration),
-            ("--config", &req.config),
-            ("--sim-config", &req.sim_config),
-        ]
-        .into_iter()
-        .filter_map(|(f, p)| p.as_ref().map(|p| (f, p))),
-    ) {
-        inputs.push(Named::new(flag, p));
+    for (flag, p) in [
+        ("--grasp", grasp),
+        ("--cloud", cloud),
+        ("--calibration", req.calibration.as_ref()),
+        ("--config", req.config.as_ref()),
+        ("--sim-config", req.sim_config.as_ref()),
+    ] {
+        if let Some(p) = p {
+            inputs.push(Named::new(flag, p));
+        }
     }
     let (flag, arg) = match &req.objects {
         Some(o) => ("--objects", o.as_str()),
@@ -464,7 +453,7 @@ impl<'r> One<'r> {
         on_event: &(dyn Fn(RunEvent<'_>) + Sync),
     ) -> Result<RunOutput, RequestError> {
         let req = self.req;
-        let sim_cfg = sim_config(req)?;
+        let sim_cfg = SimConfig::load_flag(req.sim_config.as_deref())?;
         let cfg = pipeline_config(req, Some(&sim_cfg))?;
         let object = ObjectSpec::simulable_one(&req.object)?;
         if req.attempts > 1 && self.source.is_some() {
@@ -503,17 +492,9 @@ impl<'r> One<'r> {
             &mut log,
             |r| {
                 let number = numbered.then_some(r.number);
-                attempts.push(report(
-                    req,
-                    &self.log,
-                    &r.plan,
-                    &r.outcome,
-                    calibrated_now,
-                    number,
-                ));
-                if let Some(last) = attempts.last() {
-                    on_event(RunEvent::Attempt(last));
-                }
+                let done = report(req, &self.log, &r.plan, &r.outcome, calibrated_now, number);
+                on_event(RunEvent::Attempt(&done));
+                attempts.push(done);
             },
         )?;
         Ok(RunOutput::Attempts {
@@ -661,14 +642,13 @@ fn table<A: SimulatedArm>(
         .collect();
     check_overlaps(req, &dirs, req.log.as_deref())?;
     let calibration = calibration(req)?;
-    let sim = sim_config(req)?;
+    let sim = SimConfig::load_flag(req.sim_config.as_deref())?;
     let pipeline = pipeline_config(req, Some(&sim))?;
     let objects = ObjectSpec::simulable_set(objects_arg)?;
     let cfg = TableConfig {
         trials: req.trials,
         seed: req.seed,
-        threads: crate::util::threads::resolve(req.threads)
-            .map_err(|m| RequestError::Flags(format!("--threads {m}")))?,
+        threads: crate::util::threads::from_flag(req.threads).map_err(RequestError::Flags)?,
         sim,
         pipeline,
         backend: SimBackendConfig::default(),
@@ -692,7 +672,7 @@ fn table<A: SimulatedArm>(
         stop,
     )
     .step(|| "running the table".into())?;
-    let interrupted = stop.is_some_and(|s| s.load(Ordering::SeqCst));
+    let interrupted = crate::util::signal::is_set(stop);
     // An agent none of whose trials finished before a stop has nothing to report.
     results.retain(|r| !r.result.objects.is_empty());
     Ok(RunOutput::Table {

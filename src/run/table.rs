@@ -204,7 +204,7 @@ pub fn run_table<A: SimulatedArm>(
     on_trial: &(dyn Fn() + Sync),
     stop: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<Vec<TableAgentResult>, TableError> {
-    let stopped = || stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
+    let stopped = || crate::util::signal::is_set(stop);
     if cfg.trials == 0 || cfg.trials > crate::eval::MAX_TRIALS {
         return Err(TableError::Config {
             field: "trials",

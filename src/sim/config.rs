@@ -462,6 +462,18 @@ impl SimConfig {
         }
     }
 
+    /// [`SimConfig::load_or_default`] for a `--sim-config`-style flag: the error says
+    /// `loading the simulator config PATH` before its cause.
+    pub fn load_flag(path: Option<&Path>) -> Result<SimConfig, crate::util::step::StepError> {
+        use crate::util::step::StepContext;
+        SimConfig::load_or_default(path).step(|| {
+            format!(
+                "loading the simulator config {}",
+                path.map_or_else(String::new, |p| p.display().to_string())
+            )
+        })
+    }
+
     /// Loads and validates a TOML file.
     pub fn load(path: &Path) -> Result<SimConfig, SimConfigError> {
         let c: SimConfig = crate::util::config::load_toml(path)?;

@@ -13,6 +13,12 @@ pub fn stopped() -> bool {
     STOP.load(Ordering::SeqCst)
 }
 
+/// Whether the stop flag a long piece of work was handed (often [`STOP`]) is set; `false`
+/// without one.
+pub fn is_set(flag: Option<&AtomicBool>) -> bool {
+    flag.is_some_and(|f| f.load(Ordering::SeqCst))
+}
+
 /// Installs the handler: the first signal sets [`STOP`] and, unless `quiet`, prints
 /// `"\ninterrupted (SIGINT or SIGTERM): {doing} (again to quit at once)"` on stderr; a
 /// second exits with 130 (128 + SIGINT, as a shell reports a process ended by Ctrl-C).
@@ -25,4 +31,18 @@ pub fn stop_on_signal(doing: &'static str, quiet: bool) -> Result<(), ctrlc::Err
             eprintln!("\ninterrupted (SIGINT or SIGTERM): {doing} (again to quit at once)");
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stop_flag_is_set_only_when_given_and_raised() {
+        let flag = AtomicBool::new(false);
+        assert!(!is_set(None));
+        assert!(!is_set(Some(&flag)));
+        flag.store(true, Ordering::SeqCst);
+        assert!(is_set(Some(&flag)));
+    }
 }

@@ -28,6 +28,12 @@ pub fn resolve(given: Option<usize>) -> Result<usize, String> {
     given.map_or_else(|| Ok(available()), check)
 }
 
+/// [`resolve`] of a command's `--threads` flag: the error names the flag, e.g.
+/// "--threads 0 must be in 1..=256".
+pub fn from_flag(given: Option<usize>) -> Result<usize, String> {
+    resolve(given).map_err(|m| format!("--threads {m}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -41,5 +47,10 @@ mod tests {
         assert!(resolve(None).is_ok_and(|n| (1..=MAX_THREADS).contains(&n)));
         assert_eq!(resolve(Some(3)), Ok(3));
         assert!(resolve(Some(0)).is_err());
+        assert_eq!(from_flag(Some(4)), Ok(4));
+        assert_eq!(
+            from_flag(Some(0)).unwrap_err(),
+            "--threads 0 must be in 1..=256"
+        );
     }
 }
